@@ -1,0 +1,244 @@
+//! The kiosk flow (`Attract` -> `Calibrate` -> `TryOn`, back to `Attract` when the person
+//! leaves), the camera that frames the person, and the egui status overlay.
+
+use bevy::prelude::*;
+use fitroom_body::plugin::Avatar;
+use fitroom_motion::plugin::AvatarMotion;
+use fitroom_sensor::{KinectJoint, plugin::SensorFeed};
+
+/// Kiosk screens.
+#[derive(States, Default, Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum KioskState {
+    /// Nobody in front of the mirror.
+    #[default]
+    Attract,
+    /// A person stepped in: hold still while we measure.
+    Calibrate,
+    /// Browse garments and sizes.
+    TryOn,
+}
+
+impl KioskState {
+    pub fn label(self) -> &'static str {
+        match self {
+            KioskState::Attract => "Attract: step in front of the mirror",
+            KioskState::Calibrate => "Calibrate: stand still with arms slightly apart",
+            KioskState::TryOn => "Try on",
+        }
+    }
+}
+
+/// Timing of the kiosk flow.
+#[derive(Resource, Debug, Clone, Copy)]
+pub struct KioskTimings {
+    /// Seconds a person must be tracked in `Calibrate` before `TryOn`.
+    pub calibrate_s: f32,
+    /// Seconds without a tracked person before going back to `Attract`.
+    pub lost_s: f32,
+}
+
+impl Default for KioskTimings {
+    fn default() -> Self {
+        Self {
+            calibrate_s: 2.0,
+            lost_s: 3.0,
+        }
+    }
+}
+
+/// What the kiosk knows about the person.
+#[derive(Resource, Debug, Default)]
+pub struct KioskStatus {
+    /// Seconds the current person has been tracked without a gap.
+    pub tracked_s: f32,
+    /// Seconds since the last tracked frame.
+    pub untracked_s: f32,
+    /// Seconds spent in the current state.
+    pub in_state_s: f32,
+}
+
+/// Marks the camera that frames the person.
+#[derive(Component)]
+pub struct MirrorCamera;
+
+pub struct KioskPlugin;
+
+impl Plugin for KioskPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_state::<KioskState>()
+            .init_resource::<KioskTimings>()
+            .init_resource::<KioskStatus>()
+            .add_systems(Update, (track_person, kiosk_transitions).chain())
+            .add_systems(PostUpdate, frame_person);
+    }
+}
+
+fn track_person(time: Res<Time>, feed: Res<SensorFeed>, mut status: ResMut<KioskStatus>) {
+    let dt = time.delta_secs();
+    let tracked = feed.new_frames.iter().any(|f| {
+        let hip = f.joint(KinectJoint::HipCenter);
+        hip.confidence > 0.5 && hip.position.is_finite()
+    });
+    if tracked {
+        status.tracked_s += dt;
+        status.untracked_s = 0.0;
+    } else {
+        status.untracked_s += dt;
+        // Frames come at 30 Hz and updates may be faster: only a real gap resets tracking.
+        if status.untracked_s > 0.5 {
+            status.tracked_s = 0.0;
+        }
+    }
+    status.in_state_s += dt;
+}
+
+fn kiosk_transitions(
+    state: Res<State<KioskState>>,
+    mut next: ResMut<NextState<KioskState>>,
+    timings: Res<KioskTimings>,
+    mut status: ResMut<KioskStatus>,
+    mut motion: Option<ResMut<AvatarMotion>>,
+) {
+    let person_present = status.untracked_s < timings.lost_s && status.tracked_s > 0.0;
+    let target = match state.get() {
+        KioskState::Attract if person_present => Some(KioskState::Calibrate),
+        KioskState::Calibrate if status.tracked_s >= timings.calibrate_s => Some(KioskState::TryOn),
+        KioskState::Calibrate | KioskState::TryOn if status.untracked_s >= timings.lost_s => {
+            Some(KioskState::Attract)
+        }
+        _ => None,
+    };
+    if let Some(target) = target {
+        info!("kiosk: {:?} -> {:?}", state.get(), target);
+        if target == KioskState::Attract
+            && let Some(motion) = motion.as_mut()
+        {
+            // The next person is a new user: calibrate again (Algorithm 1, line 10).
+            motion.retargeter.reset();
+        }
+        next.set(target);
+        status.in_state_s = 0.0;
+    }
+}
+
+/// Keeps the person framed: the camera looks at the avatar's pelvis from the front, following
+/// it smoothly so a walk across the room stays in view.
+fn frame_person(
+    time: Res<Time>,
+    avatar: Query<&GlobalTransform, With<Avatar>>,
+    motion: Option<Res<AvatarMotion>>,
+    mut camera: Query<&mut Transform, With<MirrorCamera>>,
+) {
+    let (Some(motion), Ok(avatar)) = (motion, avatar.single()) else {
+        return;
+    };
+    let Some(pelvis) = motion.retargeter.skeleton().index_of("pelvis") else {
+        return;
+    };
+    let Some(&pelvis_sensor) = motion.pose.heads.get(pelvis) else {
+        return;
+    };
+    let pelvis_world = avatar.transform_point(pelvis_sensor);
+    if !pelvis_world.is_finite() {
+        return;
+    }
+    let focus = Vec3::new(pelvis_world.x, 0.95, pelvis_world.z);
+    let desired = focus + Vec3::new(0.0, 0.25, 3.4);
+    let blend = 1.0 - (-3.0 * time.delta_secs()).exp();
+    for mut transform in &mut camera {
+        let position = transform.translation.lerp(desired, blend);
+        *transform = Transform::from_translation(position).looking_at(focus, Vec3::Y);
+    }
+}
+
+/// Places the camera at once where [`frame_person`] would settle (used before screenshots).
+pub fn snap_camera(world: &mut World) {
+    let Some(motion) = world.get_resource::<AvatarMotion>() else {
+        return;
+    };
+    let Some(pelvis) = motion.retargeter.skeleton().index_of("pelvis") else {
+        return;
+    };
+    let Some(&pelvis_sensor) = motion.pose.heads.get(pelvis) else {
+        return;
+    };
+    let mut avatars = world.query_filtered::<&Transform, With<Avatar>>();
+    let Ok(avatar) = avatars.single(world) else {
+        return;
+    };
+    let pelvis_world = avatar.transform_point(pelvis_sensor);
+    let focus = Vec3::new(pelvis_world.x, 0.95, pelvis_world.z);
+    let mut cameras = world.query_filtered::<&mut Transform, With<MirrorCamera>>();
+    for mut transform in cameras.iter_mut(world) {
+        *transform = Transform::from_translation(focus + Vec3::new(0.0, 0.25, 3.4))
+            .looking_at(focus, Vec3::Y);
+    }
+}
+
+/// The egui status overlay: frame rate, kiosk state, sensor and calibration.
+pub mod ui {
+    use bevy::diagnostic::{DiagnosticsStore, FrameTimeDiagnosticsPlugin};
+    use bevy::prelude::*;
+    use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
+    use fitroom_motion::plugin::AvatarMotion;
+    use fitroom_sensor::plugin::SensorFeed;
+
+    use super::{KioskState, KioskStatus};
+
+    pub struct OverlayPlugin;
+
+    impl Plugin for OverlayPlugin {
+        fn build(&self, app: &mut App) {
+            if !app.is_plugin_added::<FrameTimeDiagnosticsPlugin>() {
+                app.add_plugins(FrameTimeDiagnosticsPlugin::default());
+            }
+            app.add_plugins(EguiPlugin::default())
+                .add_systems(EguiPrimaryContextPass, status_overlay);
+        }
+    }
+
+    fn status_overlay(
+        mut contexts: EguiContexts,
+        diagnostics: Res<DiagnosticsStore>,
+        state: Res<State<KioskState>>,
+        status: Res<KioskStatus>,
+        feed: Res<SensorFeed>,
+        motion: Option<Res<AvatarMotion>>,
+    ) -> Result {
+        let fps = diagnostics
+            .get(&FrameTimeDiagnosticsPlugin::FPS)
+            .and_then(|d| d.smoothed())
+            .unwrap_or(0.0);
+        let ctx = contexts.ctx_mut()?;
+        egui::Area::new(egui::Id::new("kiosk-status"))
+            .anchor(egui::Align2::LEFT_TOP, egui::vec2(16.0, 16.0))
+            .show(ctx, |ui| {
+                egui::Frame::popup(ui.style()).show(ui, |ui| {
+                    ui.heading("fitroom");
+                    ui.label(format!("{fps:.0} fps"));
+                    ui.label(state.get().label());
+                    ui.label(format!(
+                        "sensor: {} ({} frames)",
+                        if feed.source_name.is_empty() {
+                            "none"
+                        } else {
+                            &feed.source_name
+                        },
+                        feed.frames_received
+                    ));
+                    if let Some(motion) = motion.as_ref()
+                        && let Some(c) = motion.retargeter.calibration()
+                    {
+                        ui.label(format!("avatar/person leg ratio {:.2}", c.scale));
+                    }
+                    if *state.get() == KioskState::Calibrate {
+                        ui.label(format!("measuring… {:.1} s", status.tracked_s));
+                    }
+                    if let Some(error) = &feed.error {
+                        ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);
+                    }
+                });
+            });
+        Ok(())
+    }
+}

@@ -1,0 +1,238 @@
+//! fitroom: a virtual fitting room. This crate wires the plugins into an `App` for each mode
+//! (the kiosk window, headless runs with or without offscreen rendering) and holds the CLI's
+//! commands; the logic lives in the `plugins/` crates.
+
+pub mod assets;
+pub mod headless;
+pub mod kiosk;
+pub mod timing;
+
+use std::{path::PathBuf, sync::Arc, time::Duration};
+
+use anyhow::{Context, Result};
+use bevy::{
+    app::ScheduleRunnerPlugin,
+    prelude::*,
+    state::app::StatesPlugin,
+    time::TimeUpdateStrategy,
+    window::{ExitCondition, WindowMode},
+    winit::WinitPlugin,
+};
+use fitroom_body::{
+    BodyModel,
+    plugin::{AvatarBody, BodyPlugin},
+};
+use fitroom_motion::{RetargetOptions, Retargeter, plugin::AvatarMotion, plugin::MotionPlugin};
+use fitroom_sensor::{
+    bvh::BvhClip,
+    bvh_source::{BvhSource, BvhSourceOptions},
+    plugin::{ActiveSensor, SensorPlugin},
+};
+
+/// How the app runs.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Mode {
+    /// The mirror kiosk in a window (full screen unless `windowed`).
+    Kiosk { windowed: bool },
+    /// No window. With `render`, an offscreen camera renders on any Vulkan adapter.
+    Headless { render: bool },
+}
+
+/// What to load.
+#[derive(Clone, Debug)]
+pub struct AppOptions {
+    pub mode: Mode,
+    /// The converted body (`assets/bodies/makehuman.fitbody` by default).
+    pub body: PathBuf,
+    /// The motion clip that drives the avatar (`assets/motions/walk.bvh` by default).
+    pub motion: PathBuf,
+    /// Offscreen image size for headless rendering.
+    pub image_size: UVec2,
+}
+
+impl AppOptions {
+    pub fn with_defaults(mode: Mode) -> Result<Self> {
+        let assets = assets::assets_dir()?;
+        Ok(Self {
+            mode,
+            body: assets.join(assets::DEFAULT_BODY),
+            motion: assets.join(assets::DEFAULT_MOTION),
+            image_size: UVec2::new(960, 720),
+        })
+    }
+}
+
+/// The background colour of the room (used by the screenshot test to find the avatar).
+pub const BACKGROUND: Color = Color::srgb(0.10, 0.11, 0.14);
+
+/// Loads the body and motion named by `options` and builds the app.
+pub fn build_app(options: &AppOptions) -> Result<App> {
+    let model = BodyModel::read(&options.body).with_context(|| {
+        format!(
+            "cannot load the body '{}'; run `fitroom import makehuman ../shared/data/makehuman` to create it",
+            options.body.display()
+        )
+    })?;
+    let clip = BvhClip::load(&options.motion)
+        .with_context(|| format!("cannot load the motion '{}'", options.motion.display()))?;
+    let source = BvhSource::from_clip(clip, BvhSourceOptions::default())
+        .with_context(|| format!("cannot replay '{}'", options.motion.display()))?;
+    let rest = model.rest_pose(&model.positions);
+    let skeleton = fitroom_motion::avatar_skeleton(&model, &rest)?;
+    let retargeter = Retargeter::new(skeleton, RetargetOptions::default())?;
+
+    let mut app = App::new();
+    let render = match options.mode {
+        Mode::Kiosk { windowed } => {
+            let window = Window {
+                title: "fitroom".into(),
+                mode: if windowed {
+                    WindowMode::Windowed
+                } else {
+                    WindowMode::BorderlessFullscreen(MonitorSelection::Primary)
+                },
+                resolution: (1280, 800).into(),
+                ..default()
+            };
+            app.add_plugins(DefaultPlugins.set(WindowPlugin {
+                primary_window: Some(window),
+                ..default()
+            }));
+            true
+        }
+        Mode::Headless { render: true } => {
+            app.add_plugins(
+                DefaultPlugins
+                    .set(WindowPlugin {
+                        primary_window: None,
+                        exit_condition: ExitCondition::DontExit,
+                        ..default()
+                    })
+                    .disable::<WinitPlugin>(),
+            )
+            .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::ZERO));
+            true
+        }
+        Mode::Headless { render: false } => {
+            app.add_plugins((
+                MinimalPlugins,
+                TransformPlugin,
+                StatesPlugin,
+                bevy::log::LogPlugin::default(),
+            ));
+            false
+        }
+    };
+    if matches!(options.mode, Mode::Headless { .. }) {
+        // Headless runs step time exactly: one frame is 1/60 s of the recording.
+        app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::from_secs_f64(
+            1.0 / 60.0,
+        )));
+    }
+
+    app.insert_resource(AvatarBody {
+        model: Arc::new(model),
+        rest,
+    })
+    .insert_resource(ActiveSensor(Box::new(source)))
+    .insert_resource(AvatarMotion::new(retargeter))
+    .add_plugins((
+        SensorPlugin,
+        MotionPlugin,
+        BodyPlugin {
+            render_mesh: render,
+        },
+        kiosk::KioskPlugin,
+        timing::TimingPlugin,
+    ));
+
+    if render {
+        app.insert_resource(ClearColor(BACKGROUND))
+            .insert_resource(GlobalAmbientLight {
+                brightness: 350.0,
+                ..default()
+            });
+        let image_target = match options.mode {
+            Mode::Headless { render: true } => Some(options.image_size),
+            _ => None,
+        };
+        app.add_systems(
+            Startup,
+            move |commands: Commands,
+                  images: ResMut<Assets<Image>>,
+                  meshes: ResMut<Assets<Mesh>>,
+                  materials: ResMut<Assets<StandardMaterial>>| {
+                spawn_room(commands, images, meshes, materials, image_target)
+            },
+        );
+    }
+    if matches!(options.mode, Mode::Kiosk { .. }) {
+        app.add_plugins(kiosk::ui::OverlayPlugin);
+    }
+    Ok(app)
+}
+
+/// Offscreen render target of a headless run.
+#[derive(Resource, Clone)]
+pub struct OffscreenTarget(pub Handle<Image>);
+
+fn spawn_room(
+    mut commands: Commands,
+    mut images: ResMut<Assets<Image>>,
+    mut meshes: ResMut<Assets<Mesh>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+    image_target: Option<UVec2>,
+) {
+    // Floor: a large matte disc.
+    commands.spawn((
+        Mesh3d(meshes.add(Circle::new(6.0))),
+        MeshMaterial3d(materials.add(StandardMaterial {
+            base_color: Color::srgb(0.32, 0.33, 0.36),
+            perceptual_roughness: 0.9,
+            ..default()
+        })),
+        Transform::from_rotation(Quat::from_rotation_x(-std::f32::consts::FRAC_PI_2))
+            .with_translation(Vec3::new(0.0, 0.0, -2.5)),
+    ));
+    // Key light from the front left, fill from the right.
+    commands.spawn((
+        DirectionalLight {
+            illuminance: 9000.0,
+            shadow_maps_enabled: true,
+            ..default()
+        },
+        Transform::from_xyz(-2.0, 4.0, 3.0).looking_at(Vec3::new(0.0, 1.0, -2.5), Vec3::Y),
+    ));
+    commands.spawn((
+        PointLight {
+            intensity: 600_000.0,
+            range: 20.0,
+            ..default()
+        },
+        Transform::from_xyz(2.5, 2.5, 0.5),
+    ));
+
+    let camera_transform =
+        Transform::from_xyz(0.0, 1.2, 0.9).looking_at(Vec3::new(0.0, 0.95, -2.5), Vec3::Y);
+    match image_target {
+        Some(size) => {
+            let image = Image::new_target_texture(
+                size.x,
+                size.y,
+                bevy::render::render_resource::TextureFormat::Rgba8UnormSrgb,
+                None,
+            );
+            let handle = images.add(image);
+            commands.insert_resource(OffscreenTarget(handle.clone()));
+            commands.spawn((
+                Camera3d::default(),
+                bevy::camera::RenderTarget::Image(handle.into()),
+                camera_transform,
+                kiosk::MirrorCamera,
+            ));
+        }
+        None => {
+            commands.spawn((Camera3d::default(), camera_transform, kiosk::MirrorCamera));
+        }
+    }
+}

@@ -1,0 +1,293 @@
+//! The `fitroom` command: the kiosk by default, headless runs, and the data tools.
+
+use std::path::PathBuf;
+
+use anyhow::{Context, Result};
+use bevy::{
+    prelude::*,
+    render::view::screenshot::{Screenshot, save_to_disk},
+};
+use clap::{Parser, Subcommand};
+use fitroom::{AppOptions, Mode, build_app, headless};
+
+#[derive(Parser)]
+#[command(
+    name = "fitroom",
+    version,
+    about = "A virtual fitting room: a measured avatar mirrors you and wears simulated garments."
+)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(clap::Args, Clone)]
+struct Inputs {
+    /// Converted body file (default: assets/bodies/makehuman.fitbody).
+    #[arg(long)]
+    body: Option<PathBuf>,
+    /// BVH clip that drives the avatar (default: the embedded assets/motions/walk.bvh).
+    #[arg(long)]
+    motion: Option<PathBuf>,
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// The mirror kiosk (the default when no command is given).
+    Kiosk {
+        /// A window instead of full screen.
+        #[arg(long)]
+        windowed: bool,
+        /// Save a screenshot of the window after `--frames` frames, then quit.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        /// Frames to run before the screenshot.
+        #[arg(long, default_value_t = 180)]
+        frames: u32,
+        #[command(flatten)]
+        inputs: Inputs,
+    },
+    /// Run the pipeline without a display server.
+    Run {
+        /// Required: no window (the only mode of `run`).
+        #[arg(long)]
+        headless: bool,
+        /// Frames to run (1/60 s of the recording each).
+        #[arg(long, default_value_t = 120)]
+        frames: u32,
+        /// Render the last frame offscreen (any Vulkan adapter, Mesa lavapipe included).
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        /// Write the JSON report here (it is printed to stdout as well).
+        #[arg(long)]
+        report: Option<PathBuf>,
+        #[command(flatten)]
+        inputs: Inputs,
+    },
+    /// Sensor tools.
+    Sensor {
+        #[command(subcommand)]
+        command: SensorCommand,
+    },
+    /// Convert source data into the product's assets.
+    Import {
+        #[command(subcommand)]
+        command: ImportCommand,
+    },
+    /// Body tools.
+    Body {
+        #[command(subcommand)]
+        command: BodyCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum SensorCommand {
+    /// Print a BVH clip's frame count, rate, duration, joints and skeleton kind.
+    Inspect {
+        file: PathBuf,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+#[derive(Subcommand)]
+enum ImportCommand {
+    /// MakeHuman data folder (e.g. ../shared/data/makehuman) to a .fitbody asset.
+    Makehuman {
+        dir: PathBuf,
+        #[arg(long, default_value = "assets/bodies/makehuman.fitbody")]
+        out: PathBuf,
+    },
+}
+
+#[derive(Subcommand)]
+enum BodyCommand {
+    /// Cross-section area of the forearm under a twist, single bone vs split (seed 000 §4.4.3).
+    TwistStudy {
+        #[arg(long, default_value_t = -90.0, allow_negative_numbers = true)]
+        degrees: f32,
+        #[arg(long)]
+        body: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
+}
+
+fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
+    let defaults = AppOptions::with_defaults(mode.clone());
+    let (body, motion) = match (&inputs.body, &inputs.motion, defaults) {
+        (Some(b), Some(m), _) => (b.clone(), m.clone()),
+        (b, m, Ok(d)) => (b.clone().unwrap_or(d.body), m.clone().unwrap_or(d.motion)),
+        (_, _, Err(e)) => return Err(e),
+    };
+    Ok(AppOptions {
+        mode,
+        body,
+        motion,
+        image_size: UVec2::new(960, 720),
+    })
+}
+
+fn main() -> std::process::ExitCode {
+    match run(Cli::parse()) {
+        Ok(()) => std::process::ExitCode::SUCCESS,
+        Err(error) => {
+            eprintln!("error: {error:#}");
+            std::process::ExitCode::FAILURE
+        }
+    }
+}
+
+fn run(cli: Cli) -> Result<()> {
+    match cli.command.unwrap_or(Command::Kiosk {
+        windowed: false,
+        screenshot: None,
+        frames: 180,
+        inputs: Inputs {
+            body: None,
+            motion: None,
+        },
+    }) {
+        Command::Kiosk {
+            windowed,
+            screenshot,
+            frames,
+            inputs,
+        } => {
+            let mut app = build_app(&options(Mode::Kiosk { windowed }, &inputs)?)?;
+            if let Some(path) = screenshot {
+                app.add_systems(Update, screenshot_then_quit(path, frames));
+            }
+            app.run();
+        }
+        Command::Run {
+            headless,
+            frames,
+            screenshot,
+            report,
+            inputs,
+        } => {
+            if !headless {
+                anyhow::bail!(
+                    "`fitroom run` runs without a window: pass --headless (for the kiosk window, run `fitroom kiosk`)"
+                );
+            }
+            let render = screenshot.is_some();
+            let result = headless::run(
+                &options(Mode::Headless { render }, &inputs)?,
+                frames,
+                screenshot.as_deref(),
+            )?;
+            let json = serde_json::to_string_pretty(&result)?;
+            if let Some(path) = report {
+                std::fs::write(&path, &json)
+                    .with_context(|| format!("cannot write the report '{}'", path.display()))?;
+            }
+            println!("{json}");
+        }
+        Command::Sensor {
+            command: SensorCommand::Inspect { file, json },
+        } => {
+            let info = fitroom_sensor::bvh_source::inspect(&file)?;
+            if json {
+                println!("{}", serde_json::to_string(&info)?);
+            } else {
+                println!(
+                    "{}: {} frames at {:.1} fps ({:.2} s), {} joints, skeleton {}",
+                    file.display(),
+                    info.frames,
+                    info.fps,
+                    info.duration_s,
+                    info.joints,
+                    info.skeleton
+                );
+            }
+        }
+        Command::Import {
+            command: ImportCommand::Makehuman { dir, out },
+        } => import_makehuman(&dir, &out)?,
+        Command::Body {
+            command:
+                BodyCommand::TwistStudy {
+                    degrees,
+                    body,
+                    json,
+                },
+        } => {
+            let path = match body {
+                Some(p) => p,
+                None => fitroom::assets::assets_dir()?.join(fitroom::assets::DEFAULT_BODY),
+            };
+            let model = fitroom_body::BodyModel::read(&path)?;
+            let report = fitroom_body::forearm::forearm_twist_study(&model, degrees)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                println!("{report:#?}");
+            }
+        }
+    }
+    Ok(())
+}
+
+fn import_makehuman(dir: &std::path::Path, out: &std::path::Path) -> Result<()> {
+    let bar = indicatif::ProgressBar::new(1);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template("{msg:24} [{bar:40}] {pos}/{len}")
+            .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    let start = std::time::Instant::now();
+    let (model, report) =
+        fitroom_body::import_makehuman_with_report(dir, &mut |stage, done, total| {
+            bar.set_message(stage.to_string());
+            bar.set_length(total as u64);
+            bar.set_position(done as u64);
+        })?;
+    bar.finish_and_clear();
+    let import_s = start.elapsed().as_secs_f64();
+    if let Some(parent) = out.parent() {
+        std::fs::create_dir_all(parent)
+            .with_context(|| format!("cannot create '{}'", parent.display()))?;
+    }
+    model.write(out)?;
+    let size = std::fs::metadata(out).map(|m| m.len()).unwrap_or(0);
+    let start = std::time::Instant::now();
+    let back = fitroom_body::BodyModel::read(out)?;
+    if back != model {
+        anyhow::bail!("{}: the body read back differs from the one written", out.display());
+    }
+    println!("{report:#?}");
+    println!(
+        "wrote {} ({:.1} MB): {} vertices ({} body), {} triangles, {} bones, {} morph targets; \
+         import {import_s:.1} s, reads back identical in {:.2} s",
+        out.display(),
+        size as f64 / 1e6,
+        model.positions.len(),
+        model.body_vertex_count,
+        model.triangles.len(),
+        model.bones.len(),
+        model.targets.len(),
+        start.elapsed().as_secs_f64()
+    );
+    Ok(())
+}
+
+/// After `frames` frames, saves a screenshot of the primary window and quits.
+fn screenshot_then_quit(
+    path: PathBuf,
+    frames: u32,
+) -> impl FnMut(Commands, MessageWriter<AppExit>, Local<u32>) {
+    move |mut commands, mut exit, mut count| {
+        *count += 1;
+        if *count == frames {
+            commands
+                .spawn(Screenshot::primary_window())
+                .observe(save_to_disk(path.clone()));
+        }
+        // The capture is written a few frames later.
+        if *count == frames + 30 {
+            exit.write(AppExit::Success);
+        }
+    }
+}
