@@ -252,9 +252,31 @@ pub fn swing_twist(q: Quat, axis: Vec3) -> (Quat, Quat) {
     ((q * twist.inverse()).normalize(), twist)
 }
 
-fn twist_correction(rest_rotation: Quat) -> Quat {
-    let dir = rest_rotation * Vec3::Y;
-    (bone_reference_frame(dir).inverse() * rest_rotation).normalize()
+/// The direction (sensor space) of the bone ending at `joint` when the person stands in the
+/// T-pose facing the sensor: the pose in which the sensor's twist reference is defined. The
+/// person's left is the sensor's -X.
+pub fn tpose_direction(joint: KinectJoint) -> Vec3 {
+    use KinectJoint::*;
+    match joint {
+        HipCenter | Spine | ShoulderCenter | Head => Vec3::Y,
+        ShoulderLeft | ElbowLeft | WristLeft | HandLeft => Vec3::NEG_X,
+        ShoulderRight | ElbowRight | WristRight | HandRight => Vec3::X,
+        HipLeft => Vec3::NEG_X,
+        HipRight => Vec3::X,
+        KneeLeft | AnkleLeft | KneeRight | AnkleRight => Vec3::NEG_Y,
+        FootLeft | FootRight => Vec3::NEG_Z,
+    }
+}
+
+/// The constant twist `C` with `G = Q * C`: the avatar bone's rest frame, first swung by the
+/// shortest arc onto the T-pose direction of its sensor bone (where the sensor's reference is
+/// defined and well conditioned), expressed in that reference. MakeHuman's rest forearms point
+/// half forward; taking the reference at the rest direction itself would twist them.
+fn twist_correction(rest_rotation: Quat, joint: KinectJoint) -> Quat {
+    let rest_dir = rest_rotation * Vec3::Y;
+    let tpose = tpose_direction(joint);
+    let swung = Quat::from_rotation_arc(rest_dir, tpose) * rest_rotation;
+    (bone_reference_frame(tpose).inverse() * swung).normalize()
 }
 
 fn is_usable(q: Quat) -> bool {
@@ -270,7 +292,7 @@ impl Retargeter {
             let i = skeleton.require(name)?;
             drives[i] = Drive::Bone {
                 joint,
-                correction: twist_correction(skeleton.bones[i].rest_rotation),
+                correction: twist_correction(skeleton.bones[i].rest_rotation, joint),
             };
         }
         for &(proximal, distal, joint) in FOREARM_MAP {
@@ -279,7 +301,7 @@ impl Retargeter {
             // The proximal and distal halves share one axis; the correction is the proximal's.
             drives[p] = Drive::ForearmProximal {
                 joint,
-                correction: twist_correction(skeleton.bones[p].rest_rotation),
+                correction: twist_correction(skeleton.bones[p].rest_rotation, joint),
                 distal: d,
             };
             drives[d] = Drive::ForearmDistal;
@@ -471,13 +493,25 @@ mod tests {
 
     #[test]
     fn twist_correction_is_a_pure_twist() {
-        for rot in [
-            Quat::from_rotation_z(2.0),
-            Quat::from_euler(glam::EulerRot::YXZ, 0.3, 2.9, 0.1),
-            Quat::from_rotation_x(1.4),
+        for (rot, joint) in [
+            (Quat::from_rotation_z(2.0), KinectJoint::ElbowLeft),
+            (
+                Quat::from_euler(glam::EulerRot::YXZ, 0.3, 2.9, 0.1),
+                KinectJoint::KneeRight,
+            ),
+            (Quat::from_rotation_x(1.4), KinectJoint::FootLeft),
         ] {
-            let c = twist_correction(rot);
+            let c = twist_correction(rot, joint);
             assert!((c * Vec3::Y).abs_diff_eq(Vec3::Y, 1e-4), "{rot:?} -> {c:?}");
         }
+    }
+
+    #[test]
+    fn a_bone_already_in_the_tpose_gets_the_sensor_reference() {
+        // An arm pointing to the person's left with its frame equal to the reference: the
+        // sensor's reference orientation must reproduce that frame exactly.
+        let frame = bone_reference_frame(Vec3::NEG_X);
+        let c = twist_correction(frame, KinectJoint::ElbowLeft);
+        assert!(c.abs_diff_eq(Quat::IDENTITY, 1e-5) || c.abs_diff_eq(-Quat::IDENTITY, 1e-5));
     }
 }
