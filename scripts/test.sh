@@ -4,4 +4,9 @@ set -euo pipefail
 cd "$(dirname "$0")/.."
 source scripts/deps.sh
 fitroom_install_deps
+# The Vulkan loader and winit want a runtime dir; CI shells have none.
+if [ -z "${XDG_RUNTIME_DIR:-}" ]; then
+    XDG_RUNTIME_DIR="$(mktemp -d)"
+    export XDG_RUNTIME_DIR
+fi
 cargo test --workspace --all-targets --locked "$@"

@@ -29,6 +29,8 @@ pub struct HeadlessReport {
     pub simulated_s: f64,
     pub sensor_source: String,
     pub sensor_frames: u64,
+    /// Time to load the body asset, milliseconds.
+    pub body_load_ms: f64,
     /// CPU time per pipeline stage.
     pub stages_ms: BTreeMap<String, StageSummary>,
     /// Path length of the avatar's pelvis over the run, metres.
@@ -151,6 +153,7 @@ pub fn run(options: &AppOptions, frames: u32, screenshot: Option<&Path>) -> Resu
         simulated_s: f64::from(frames) / 60.0,
         sensor_source: feed.source_name.clone(),
         sensor_frames: feed.frames_received,
+        body_load_ms: world.resource::<crate::LoadTimings>().body_load_ms,
         stages_ms,
         root_path_m: world.resource::<RootPath>().length_m,
         retarget_scale: motion

@@ -67,12 +67,14 @@ pub const BACKGROUND: Color = Color::srgb(0.10, 0.11, 0.14);
 
 /// Loads the body and motion named by `options` and builds the app.
 pub fn build_app(options: &AppOptions) -> Result<App> {
+    let load_start = std::time::Instant::now();
     let model = BodyModel::read(&options.body).with_context(|| {
         format!(
             "cannot load the body '{}'; run `fitroom import makehuman ../shared/data/makehuman` to create it",
             options.body.display()
         )
     })?;
+    let body_load_ms = load_start.elapsed().as_secs_f64() * 1e3;
     let clip = BvhClip::load(&options.motion)
         .with_context(|| format!("cannot load the motion '{}'", options.motion.display()))?;
     let source = BvhSource::from_clip(clip, BvhSourceOptions::default())
@@ -130,21 +132,22 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         )));
     }
 
-    app.insert_resource(AvatarBody {
-        model: Arc::new(model),
-        rest,
-    })
-    .insert_resource(ActiveSensor(Box::new(source)))
-    .insert_resource(AvatarMotion::new(retargeter))
-    .add_plugins((
-        SensorPlugin,
-        MotionPlugin,
-        BodyPlugin {
-            render_mesh: render,
-        },
-        kiosk::KioskPlugin,
-        timing::TimingPlugin,
-    ));
+    app.insert_resource(LoadTimings { body_load_ms })
+        .insert_resource(AvatarBody {
+            model: Arc::new(model),
+            rest,
+        })
+        .insert_resource(ActiveSensor(Box::new(source)))
+        .insert_resource(AvatarMotion::new(retargeter))
+        .add_plugins((
+            SensorPlugin,
+            MotionPlugin,
+            BodyPlugin {
+                render_mesh: render,
+            },
+            kiosk::KioskPlugin,
+            timing::TimingPlugin,
+        ));
 
     if render {
         app.insert_resource(ClearColor(BACKGROUND))
@@ -170,6 +173,13 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         app.add_plugins(kiosk::ui::OverlayPlugin);
     }
     Ok(app)
+}
+
+/// How long loading the inputs took.
+#[derive(Resource, Debug, Clone, Copy)]
+pub struct LoadTimings {
+    /// Reading, inflating, checking and decoding the `.fitbody` asset, milliseconds.
+    pub body_load_ms: f64,
 }
 
 /// Offscreen render target of a headless run.

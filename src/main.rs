@@ -255,7 +255,10 @@ fn import_makehuman(dir: &std::path::Path, out: &std::path::Path) -> Result<()> 
     let start = std::time::Instant::now();
     let back = fitroom_body::BodyModel::read(out)?;
     if back != model {
-        anyhow::bail!("{}: the body read back differs from the one written", out.display());
+        anyhow::bail!(
+            "{}: the body read back differs from the one written",
+            out.display()
+        );
     }
     println!("{report:#?}");
     println!(
