@@ -121,57 +121,56 @@ fn kiosk_transitions(
     }
 }
 
-/// Keeps the person framed: the camera looks at the avatar's pelvis from the front, following
-/// it smoothly so a walk across the room stays in view.
+/// The avatar's pelvis in world space, if there is an avatar with a pose.
+fn pelvis_world(motion: &AvatarMotion, avatar: &Transform) -> Option<Vec3> {
+    let pelvis = motion.retargeter.skeleton().index_of("pelvis")?;
+    let head = *motion.pose.heads.get(pelvis)?;
+    Some(avatar.transform_point(head)).filter(|p| p.is_finite())
+}
+
+/// Where the camera settles to frame a person whose pelvis is at `pelvis`: in front of them,
+/// a little above, looking at their middle.
+fn framing(pelvis: Vec3) -> Transform {
+    let focus = Vec3::new(pelvis.x, 0.95, pelvis.z);
+    Transform::from_translation(focus + Vec3::new(0.0, 0.25, 3.4)).looking_at(focus, Vec3::Y)
+}
+
+/// Keeps the person framed, following them smoothly so a walk across the room stays in view.
 fn frame_person(
     time: Res<Time>,
-    avatar: Query<&GlobalTransform, With<Avatar>>,
+    avatar: Query<&Transform, (With<Avatar>, Without<MirrorCamera>)>,
     motion: Option<Res<AvatarMotion>>,
     mut camera: Query<&mut Transform, With<MirrorCamera>>,
 ) {
     let (Some(motion), Ok(avatar)) = (motion, avatar.single()) else {
         return;
     };
-    let Some(pelvis) = motion.retargeter.skeleton().index_of("pelvis") else {
+    let Some(pelvis) = pelvis_world(&motion, avatar) else {
         return;
     };
-    let Some(&pelvis_sensor) = motion.pose.heads.get(pelvis) else {
-        return;
-    };
-    let pelvis_world = avatar.transform_point(pelvis_sensor);
-    if !pelvis_world.is_finite() {
-        return;
-    }
-    let focus = Vec3::new(pelvis_world.x, 0.95, pelvis_world.z);
-    let desired = focus + Vec3::new(0.0, 0.25, 3.4);
+    let target = framing(pelvis);
     let blend = 1.0 - (-3.0 * time.delta_secs()).exp();
     for mut transform in &mut camera {
-        let position = transform.translation.lerp(desired, blend);
-        *transform = Transform::from_translation(position).looking_at(focus, Vec3::Y);
+        transform.translation = transform.translation.lerp(target.translation, blend);
+        transform.rotation = transform.rotation.slerp(target.rotation, blend);
     }
 }
 
 /// Places the camera at once where [`frame_person`] would settle (used before screenshots).
 pub fn snap_camera(world: &mut World) {
-    let Some(motion) = world.get_resource::<AvatarMotion>() else {
-        return;
-    };
-    let Some(pelvis) = motion.retargeter.skeleton().index_of("pelvis") else {
-        return;
-    };
-    let Some(&pelvis_sensor) = motion.pose.heads.get(pelvis) else {
-        return;
-    };
     let mut avatars = world.query_filtered::<&Transform, With<Avatar>>();
-    let Ok(avatar) = avatars.single(world) else {
+    let Ok(avatar) = avatars.single(world).copied() else {
         return;
     };
-    let pelvis_world = avatar.transform_point(pelvis_sensor);
-    let focus = Vec3::new(pelvis_world.x, 0.95, pelvis_world.z);
+    let Some(pelvis) = world
+        .get_resource::<AvatarMotion>()
+        .and_then(|m| pelvis_world(m, &avatar))
+    else {
+        return;
+    };
     let mut cameras = world.query_filtered::<&mut Transform, With<MirrorCamera>>();
     for mut transform in cameras.iter_mut(world) {
-        *transform = Transform::from_translation(focus + Vec3::new(0.0, 0.25, 3.4))
-            .looking_at(focus, Vec3::Y);
+        *transform = framing(pelvis);
     }
 }
 

@@ -224,7 +224,7 @@ fn run(cli: Cli) -> Result<()> {
             if json {
                 println!("{}", serde_json::to_string_pretty(&report)?);
             } else {
-                println!("{report:#?}");
+                print_twist_study(&report);
             }
         }
     }
@@ -274,6 +274,51 @@ fn import_makehuman(dir: &std::path::Path, out: &std::path::Path) -> Result<()> 
         start.elapsed().as_secs_f64()
     );
     Ok(())
+}
+
+fn print_twist_study(r: &fitroom_body::ForearmTwistReport) {
+    let place = |offset_m: f32| {
+        if offset_m < 0.0 {
+            format!("{:.1} cm above the elbow", -offset_m * 100.0)
+        } else {
+            format!("{:.1} cm below the elbow", offset_m * 100.0)
+        }
+    };
+    println!(
+        "{:.0}° twist of the {} forearm ({:.1} cm long); mid-forearm section {:.1} cm² at rest",
+        r.twist_deg,
+        r.side,
+        r.forearm_length_m * 100.0,
+        r.rest_mid_area_cm2
+    );
+    println!("area kept (posed / rest)     mid-forearm  closed form  worst section");
+    let rows = [
+        (
+            "single forearm bone",
+            r.mid_section.single_bone,
+            r.theory_mid.single_bone,
+            r.worst.single_bone,
+        ),
+        (
+            "split, all twist distal",
+            r.mid_section.split_literal,
+            r.theory_mid.split_literal,
+            r.worst.split_literal,
+        ),
+        (
+            "split, twist shared (used)",
+            r.mid_section.split_shared,
+            r.theory_mid.split_shared,
+            r.worst.split_shared,
+        ),
+    ];
+    for (name, mid, theory, worst) in rows {
+        println!(
+            "{name:<28} {mid:>11.3}  {theory:>11.3}  {:.3} ({})",
+            worst.ratio,
+            place(worst.offset_m)
+        );
+    }
 }
 
 /// After `frames` frames, saves a screenshot of the primary window and quits.

@@ -6,6 +6,10 @@
 use glam::{Quat, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
+/// Turns model space (facing +Z, +X the body's left) into Kinect sensor space so the body faces
+/// the sensor (-Z): a half turn about +Y.
+pub const MODEL_TO_SENSOR: Quat = Quat::from_xyzw(0.0, 1.0, 0.0, 0.0);
+
 /// Where a rig places a bone end on the mesh (MakeHuman rig `strategy`), so the skeleton
 /// follows any morphed body.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]

@@ -17,7 +17,7 @@ use bevy::{
     prelude::*,
 };
 
-use crate::{BodyModel, RestPose};
+use crate::{BodyModel, MODEL_TO_SENSOR, RestPose};
 
 /// The loaded body: the model and its rest pose.
 #[derive(Resource, Clone)]
@@ -37,9 +37,6 @@ pub struct AvatarJoint(pub usize);
 /// The avatar's skinned mesh.
 #[derive(Component, Debug)]
 pub struct AvatarSkin;
-
-/// Turns the body's model space (facing +Z) into sensor space (facing the sensor, -Z).
-pub const MODEL_TO_SENSOR: Quat = Quat::from_xyzw(0.0, 1.0, 0.0, 0.0);
 
 /// Where the avatar stands: the sensor-to-world transform.
 #[derive(Resource, Debug, Clone, Copy)]

@@ -15,12 +15,9 @@
 //! Spaces: everything here is in sensor space (metres, Kinect v1 axes). The avatar's model
 //! space (facing +Z) is turned to face the sensor by [`MODEL_TO_SENSOR`].
 
+use fitroom_body::MODEL_TO_SENSOR;
 use fitroom_sensor::{KinectJoint, SensorFrame, frame::bone_reference_frame};
 use glam::{Quat, Vec3};
-
-/// Turns the avatar's model space (facing +Z, +X its left) into sensor space so that it faces
-/// the sensor (-Z): a half turn about +Y.
-pub const MODEL_TO_SENSOR: Quat = Quat::from_xyzw(0.0, 1.0, 0.0, 0.0);
 
 /// The minimum joint confidence for a new orientation to be used (Algorithm 1, line 5).
 pub const CONFIDENCE_THRESHOLD: f32 = 0.5;
