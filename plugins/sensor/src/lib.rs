@@ -18,6 +18,7 @@ pub mod bvh;
 pub mod bvh_skeleton;
 pub mod bvh_source;
 pub mod frame;
+pub mod noise;
 pub mod source;
 
 #[cfg(feature = "plugin")]
