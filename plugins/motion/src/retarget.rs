@@ -136,11 +136,15 @@ enum Drive {
         joint: KinectJoint,
         correction: Quat,
     },
-    /// The proximal half of a split forearm: swing plus a share of the forearm's twist.
+    /// The proximal half of a split forearm: swing plus a share of the forearm's twist. The
+    /// twist of the hand about the forearm's axis (pronation, which CMU data carry on the hand)
+    /// is moved into the forearm too: the wrist cannot twist, the forearm does.
     ForearmProximal {
         joint: KinectJoint,
         correction: Quat,
         distal: usize,
+        hand_joint: KinectJoint,
+        hand_correction: Quat,
     },
     /// The distal (twist) half of a split forearm: set together with its proximal bone.
     ForearmDistal,
@@ -162,7 +166,7 @@ pub struct AvatarPose {
 /// Calibration taken from the first frame of a new user (Algorithm 1, line 10-11).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Calibration {
-    /// Performer's hip centre at calibration, sensor space.
+    /// Midpoint of the performer's hip joints at calibration, sensor space.
     pub start_hip: Vec3,
     /// Avatar leg length / performer leg length.
     pub scale: f32,
@@ -202,8 +206,11 @@ pub struct Retargeter {
     avatar_leg_m: f32,
     /// Last orientation per Kinect joint that passed the confidence test.
     last_good: [Option<Quat>; KinectJoint::COUNT],
+    /// Last confident midpoint of the two hip joints, sensor space.
     last_hip: Option<Vec3>,
     calibration: Option<Calibration>,
+    /// The avatar's thigh bones, whose heads are its hip joints.
+    thighs: [usize; 2],
     /// Number of joint samples rejected for low confidence or non-finite values.
     pub rejected_samples: u64,
 }
@@ -230,10 +237,23 @@ pub const BONE_MAP: &[(&str, KinectJoint)] = &[
     ("foot_r", KinectJoint::FootRight),
 ];
 
-/// Split forearms: (proximal bone, distal twist bone, Kinect joint at the wrist).
-pub const FOREARM_MAP: &[(&str, &str, KinectJoint)] = &[
-    ("lowerarm_l", "lowerarm_twist_l", KinectJoint::WristLeft),
-    ("lowerarm_r", "lowerarm_twist_r", KinectJoint::WristRight),
+/// Split forearms: (proximal bone, distal twist bone, Kinect joint at the wrist, hand bone,
+/// Kinect joint at the hand).
+pub const FOREARM_MAP: &[(&str, &str, KinectJoint, &str, KinectJoint)] = &[
+    (
+        "lowerarm_l",
+        "lowerarm_twist_l",
+        KinectJoint::WristLeft,
+        "hand_l",
+        KinectJoint::HandLeft,
+    ),
+    (
+        "lowerarm_r",
+        "lowerarm_twist_r",
+        KinectJoint::WristRight,
+        "hand_r",
+        KinectJoint::HandRight,
+    ),
 ];
 
 /// Splits `q` into swing and twist about `axis`: `q = swing * twist`.
@@ -276,6 +296,16 @@ fn twist_correction(rest_rotation: Quat, joint: KinectJoint) -> Quat {
     (bone_reference_frame(tpose).inverse() * swung).normalize()
 }
 
+/// Midpoint of the two hip joints when both are confidently tracked and finite.
+fn mid_hips(frame: &SensorFrame) -> Option<Vec3> {
+    let l = frame.joint(KinectJoint::HipLeft);
+    let r = frame.joint(KinectJoint::HipRight);
+    let ok = |j: &fitroom_sensor::JointSample| {
+        j.confidence > CONFIDENCE_THRESHOLD && j.position.is_finite()
+    };
+    (ok(l) && ok(r)).then(|| 0.5 * (l.position + r.position))
+}
+
 fn is_usable(q: Quat) -> bool {
     q.is_finite() && (q.length_squared() - 1.0).abs() < 0.01
 }
@@ -292,17 +322,21 @@ impl Retargeter {
                 correction: twist_correction(skeleton.bones[i].rest_rotation, joint),
             };
         }
-        for &(proximal, distal, joint) in FOREARM_MAP {
+        for &(proximal, distal, joint, hand, hand_joint) in FOREARM_MAP {
             let p = skeleton.require(proximal)?;
             let d = skeleton.require(distal)?;
+            let h = skeleton.require(hand)?;
             // The proximal and distal halves share one axis; the correction is the proximal's.
             drives[p] = Drive::ForearmProximal {
                 joint,
                 correction: twist_correction(skeleton.bones[p].rest_rotation, joint),
                 distal: d,
+                hand_joint,
+                hand_correction: twist_correction(skeleton.bones[h].rest_rotation, hand_joint),
             };
             drives[d] = Drive::ForearmDistal;
         }
+        let thighs = [skeleton.require("thigh_l")?, skeleton.require("thigh_r")?];
         let avatar_leg_m = skeleton
             .leg_length()
             .ok_or_else(|| RetargetError::MissingBone("thigh_l/calf_l/foot_l".into()))?;
@@ -315,6 +349,7 @@ impl Retargeter {
             last_good: [None; KinectJoint::COUNT],
             last_hip: None,
             calibration: None,
+            thighs,
             rejected_samples: 0,
         })
     }
@@ -358,8 +393,8 @@ impl Retargeter {
                 KinectJoint::KneeRight,
                 KinectJoint::AnkleRight,
             ));
-        let hip = p(KinectJoint::HipCenter);
-        if !(performer_leg.is_finite() && performer_leg > 0.2 && hip.is_finite()) {
+        let hip = mid_hips(frame)?;
+        if !(performer_leg.is_finite() && performer_leg > 0.2) {
             return None;
         }
         Some(Calibration {
@@ -381,9 +416,8 @@ impl Retargeter {
                 self.rejected_samples += 1;
             }
         }
-        let hip = frame.joint(KinectJoint::HipCenter);
-        if hip.confidence > CONFIDENCE_THRESHOLD && hip.position.is_finite() {
-            self.last_hip = Some(hip.position);
+        if let Some(hips) = mid_hips(frame) {
+            self.last_hip = Some(hips);
         }
         if self.calibration.is_none() {
             self.calibration = self.calibrate(frame);
@@ -391,19 +425,20 @@ impl Retargeter {
         self.solve(frame.timestamp_s)
     }
 
-    fn root_position(&self) -> Vec3 {
-        let rest = self.skeleton.bones[self.pelvis].rest_head;
+    /// Where the midpoint of the avatar's hip joints goes: the performer's, with the motion
+    /// and the height above the floor scaled by the leg-length ratio.
+    fn hips_target(&self) -> Option<Vec3> {
         match (self.calibration, self.last_hip) {
             (Some(c), Some(hip)) => {
                 let horizontal = Vec3::new(c.start_hip.x, 0.0, c.start_hip.z)
                     + Vec3::new(hip.x - c.start_hip.x, 0.0, hip.z - c.start_hip.z) * c.scale;
-                Vec3::new(
+                Some(Vec3::new(
                     horizontal.x,
                     c.floor_y + (hip.y - c.floor_y) * c.scale,
                     horizontal.z,
-                )
+                ))
             }
-            _ => rest,
+            _ => None,
         }
     }
 
@@ -414,7 +449,6 @@ impl Retargeter {
         let mut rotations = vec![Quat::IDENTITY; n];
         let mut locals = vec![Quat::IDENTITY; n];
         let mut distal_locals: Vec<Option<Quat>> = vec![None; n];
-        let root_position = self.root_position();
 
         for i in 0..n {
             let bone = &bones[i];
@@ -437,11 +471,21 @@ impl Retargeter {
                     joint,
                     correction,
                     distal,
+                    hand_joint,
+                    hand_correction,
                 } => match self.last_good[joint.index()] {
                     Some(q) => {
                         let target = (q * correction).normalize();
                         let local = parent_rotation.inverse() * target;
-                        let (swing, twist) = swing_twist(local, Vec3::Y);
+                        let (swing, own_twist) = swing_twist(local, Vec3::Y);
+                        let hand_twist = match self.last_good[hand_joint.index()] {
+                            Some(h) => {
+                                let hand = (h * hand_correction).normalize();
+                                swing_twist(target.inverse() * hand, Vec3::Y).1
+                            }
+                            None => Quat::IDENTITY,
+                        };
+                        let twist = (own_twist * hand_twist).normalize();
                         let share = self.options.forearm_twist_share_proximal.clamp(0.0, 1.0);
                         let proximal_twist = Quat::IDENTITY.slerp(twist, share);
                         distal_locals[distal] =
@@ -460,8 +504,14 @@ impl Retargeter {
             heads[i] = parent_head + parent_rotation * bone.local_translation;
         }
 
-        // Place the pelvis at the retargeted root and move everything with it.
-        let offset = root_position - heads[self.pelvis];
+        // Put the avatar's hip joints where the performer's are (scaled) and move everything
+        // with them. The pelvis bone's head is not a hip joint, and its offset from the hip
+        // joints differs between performer and avatar: aligning it would sink or lift the feet.
+        let avatar_hips = 0.5 * (heads[self.thighs[0]] + heads[self.thighs[1]]);
+        let offset = match self.hips_target() {
+            Some(target) => target - avatar_hips,
+            None => bones[self.pelvis].rest_head - heads[self.pelvis],
+        };
         for head in &mut heads {
             *head += offset;
         }
