@@ -6,7 +6,14 @@
 //!
 //! The core modules use no Bevy types; the `plugin` feature adds [`plugin::MotionPlugin`].
 
+pub mod eval;
+pub mod filter;
+pub mod footskate;
+pub mod ik;
+pub mod limits;
+pub mod metrics;
 pub mod retarget;
+pub mod smoothing;
 
 #[cfg(feature = "plugin")]
 pub mod plugin;

@@ -1,11 +1,20 @@
-//! Bevy adapter: turns the sensor feed into an [`AvatarPose`] and writes it to the avatar's
-//! joint transforms.
+//! Bevy adapter: runs the motion pipeline on the sensor feed (bad-frame gate -> joint filter ->
+//! retargeting -> joint limits -> foot-skate correction) and writes the pose to the avatar's
+//! joint transforms. A rejected frame never reaches the avatar: the last good pose stays and
+//! the rejection is counted.
 
 use bevy::prelude::*;
 use fitroom_body::plugin::AvatarJoint;
-use fitroom_sensor::plugin::{SensorFeed, SensorSystems};
+use fitroom_sensor::{SensorFrame, plugin::SensorFeed};
 
-use crate::{AvatarPose, Retargeter};
+use crate::{
+    AvatarPose,
+    eval::AvatarPipeline,
+    filter::{
+        JointFilter,
+        gate::{FrameGate, GateDecision},
+    },
+};
 
 /// Systems of the motion plugin, in order.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
@@ -16,23 +25,59 @@ pub enum MotionSystems {
     ApplyPose,
 }
 
-/// The retargeter and its latest pose.
+/// The motion pipeline and its latest output.
 #[derive(Resource)]
 pub struct AvatarMotion {
-    pub retargeter: Retargeter,
+    pub pipeline: AvatarPipeline,
+    pub gate: FrameGate,
+    pub filter: Box<dyn JointFilter>,
     pub pose: AvatarPose,
     /// Sensor frames turned into poses so far.
     pub frames_applied: u64,
+    /// The last accepted raw frame and its filtered version (for the debug overlay).
+    pub last_raw: Option<SensorFrame>,
+    pub last_filtered: Option<SensorFrame>,
+    last_timestamp: Option<f64>,
 }
 
 impl AvatarMotion {
-    pub fn new(retargeter: Retargeter) -> Self {
-        let pose = retargeter.rest_pose();
+    pub fn new(pipeline: AvatarPipeline, filter: Box<dyn JointFilter>) -> Self {
+        let pose = pipeline.retargeter().rest_pose();
         Self {
-            retargeter,
+            pipeline,
+            gate: FrameGate::new(),
+            filter,
             pose,
             frames_applied: 0,
+            last_raw: None,
+            last_filtered: None,
+            last_timestamp: None,
         }
+    }
+
+    /// Runs one sensor frame through the pipeline; a rejected frame changes nothing.
+    pub fn push(&mut self, frame: &SensorFrame) -> bool {
+        if !matches!(self.gate.check(frame), GateDecision::Accept) {
+            return false;
+        }
+        let filtered = self.filter.filter(frame);
+        let dt = self
+            .last_timestamp
+            .map_or(1.0 / 30.0, |t| (frame.timestamp_s - t).max(1e-3)) as f32;
+        self.last_timestamp = Some(frame.timestamp_s);
+        self.pose = self.pipeline.pose(&filtered, dt);
+        self.last_raw = Some(frame.clone());
+        self.last_filtered = Some(filtered);
+        self.frames_applied += 1;
+        true
+    }
+
+    /// A new user: calibrate again and restart the filter.
+    pub fn reset(&mut self) {
+        self.pipeline.reset();
+        self.gate.reset();
+        self.filter.reset();
+        self.last_timestamp = None;
     }
 }
 
@@ -51,8 +96,6 @@ impl Plugin for MotionPlugin {
                 apply_pose.in_set(MotionSystems::ApplyPose),
             ),
         );
-        // The sensor set runs in PreUpdate, so it is always before these.
-        let _ = SensorSystems::Poll;
     }
 }
 
@@ -61,8 +104,7 @@ fn retarget(feed: Res<SensorFeed>, motion: Option<ResMut<AvatarMotion>>) {
         return;
     };
     for frame in &feed.new_frames {
-        motion.pose = motion.retargeter.update(frame);
-        motion.frames_applied += 1;
+        motion.push(frame);
     }
 }
 
@@ -76,7 +118,7 @@ fn apply_pose(
     if !motion.is_changed() {
         return;
     }
-    let bones = &motion.retargeter.skeleton().bones;
+    let bones = &motion.pipeline.skeleton().bones;
     let pose = &motion.pose;
     for (joint, mut transform) in &mut joints {
         let i = joint.0;

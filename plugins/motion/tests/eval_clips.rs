@@ -1,0 +1,100 @@
+//! Issue acceptance over all 15 shared CMU clips, with the Kinect v1 noise model (seed 1):
+//! our filter against the Kinect SDK's Holt filter (default set) and the One Euro filter tuned
+//! with its authors' procedure; foot skating and joint limits of the corrected output.
+
+use std::path::{Path, PathBuf};
+
+use fitroom_body::BodyModel;
+use fitroom_motion::{
+    AvatarSkeleton,
+    eval::{EvalOptions, EvalReport, FilterChoice, evaluate_clip},
+};
+
+fn shared_dir() -> PathBuf {
+    std::env::var_os("FITROOM_SHARED")
+        .map(PathBuf::from)
+        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared").into())
+}
+
+fn skeleton() -> AvatarSkeleton {
+    let path = concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../../assets/bodies/makehuman.fitbody"
+    );
+    let model = BodyModel::read(Path::new(path)).expect("body asset");
+    let rest = model.rest_pose(&model.positions);
+    fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton")
+}
+
+fn clips() -> Vec<PathBuf> {
+    let dir = shared_dir().join("data/mocap/cmu");
+    let index = std::fs::read_to_string(dir.join("INDEX.tsv")).expect("INDEX.tsv");
+    index
+        .lines()
+        .skip(1)
+        .filter_map(|l| l.split('\t').next())
+        .filter(|f| f.ends_with(".bvh"))
+        .map(|f| dir.join(f))
+        .collect()
+}
+
+fn run(path: &Path, skeleton: &AvatarSkeleton, filter: &str) -> EvalReport {
+    let options = EvalOptions {
+        filter: filter.parse::<FilterChoice>().expect("filter name"),
+        ..EvalOptions::default()
+    };
+    evaluate_clip(path, skeleton, &options)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .report
+}
+
+#[test]
+fn our_filter_beats_holt_and_one_euro_and_the_output_is_clean() {
+    let skeleton = skeleton();
+    let mut wins = 0;
+    let (mut skate_in, mut skate_out) = (0.0f32, 0.0f32);
+    let mut violations = 0;
+    println!(
+        "| clip | raw RMSE mm | holt RMSE / lag | 1€ tuned RMSE / lag | ours RMSE / lag | ours jitter m/s² (clean) | avatar skate in → out | limit violations | µs/frame |"
+    );
+    println!("|---|---|---|---|---|---|---|---|---|");
+    for path in clips() {
+        let holt = run(&path, &skeleton, "holt");
+        let euro = run(&path, &skeleton, "oneeuro-tuned");
+        let ours = run(&path, &skeleton, "kalman");
+        let win = ours.output.rmse_mm < holt.output.rmse_mm
+            && ours.output.rmse_mm < euro.output.rmse_mm
+            && ours.output.lag_ms <= holt.output.lag_ms.max(euro.output.lag_ms) + 33.0;
+        wins += usize::from(win);
+        skate_in += ours.avatar_foot_skate_input;
+        skate_out += ours.avatar_foot_skate_output;
+        violations += ours.joint_limit_violations;
+        println!(
+            "| {} | {:.1} | {:.1} / {:.0} | {:.1} / {:.0} | {:.1} / {:.0} | {:.1} ({:.1}) | {:.3} → {:.3} | {} | {:.1} |{}",
+            ours.clip,
+            ours.input.rmse_mm,
+            holt.output.rmse_mm,
+            holt.output.lag_ms,
+            euro.output.rmse_mm,
+            euro.output.lag_ms,
+            ours.output.rmse_mm,
+            ours.output.lag_ms,
+            ours.output.jitter_m_s2,
+            ours.output.clean_jitter_m_s2,
+            ours.avatar_foot_skate_input,
+            ours.avatar_foot_skate_output,
+            ours.joint_limit_violations,
+            ours.pipeline_us_per_frame,
+            if win { "" } else { " not better" }
+        );
+        assert!(ours.output.rmse_mm.is_finite() && ours.output.rmse_mm > 0.0);
+    }
+    println!(
+        "ours better on {wins}/15 clips; avatar foot skating (mean over clips) {:.3} → {:.3} ({:.0}%); joint-limit violations {violations}",
+        skate_in / 15.0,
+        skate_out / 15.0,
+        100.0 * skate_out / skate_in.max(1e-6)
+    );
+    assert!(wins >= 12, "our filter is better on only {wins}/15 clips");
+    assert_eq!(violations, 0, "joint-limit violations in the output");
+}
