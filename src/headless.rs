@@ -35,6 +35,8 @@ pub struct HeadlessReport {
     pub stages_ms: BTreeMap<String, StageSummary>,
     /// Path length of the avatar's pelvis over the run, metres.
     pub root_path_m: f32,
+    /// Sensor frames the bad-frame gate kept from the avatar.
+    pub rejected_frames: u64,
     /// Avatar leg length / performer leg length used to scale root motion.
     pub retarget_scale: Option<f32>,
     /// World positions of every avatar joint at the last frame, metres.
@@ -54,7 +56,7 @@ fn track_root_path(motion: Option<Res<AvatarMotion>>, mut path: ResMut<RootPath>
     if !motion.is_changed() || motion.frames_applied == 0 {
         return;
     }
-    let Some(pelvis) = motion.retargeter.skeleton().index_of("pelvis") else {
+    let Some(pelvis) = motion.pipeline.skeleton().index_of("pelvis") else {
         return;
     };
     let Some(&head) = motion.pose.heads.get(pelvis) else {
@@ -157,8 +159,9 @@ pub fn run(options: &AppOptions, frames: u32, screenshot: Option<&Path>) -> Resu
         stages_ms,
         root_path_m: world.resource::<RootPath>().length_m,
         retarget_scale: motion
-            .and_then(|m| m.retargeter.calibration())
+            .and_then(|m| m.pipeline.retargeter().calibration())
             .map(|c| c.scale),
+        rejected_frames: motion.map_or(0, |m| m.gate.stats().rejected_total()),
         joints: BTreeMap::new(),
         screenshot,
     };

@@ -57,6 +57,48 @@ pub struct KioskStatus {
     pub in_state_s: f32,
 }
 
+/// Whether the raw and filtered sensor skeletons are drawn over the avatar (key D).
+#[derive(Resource, Debug, Default)]
+pub struct DebugSkeletons(pub bool);
+
+fn toggle_debug_skeletons(
+    keys: Option<Res<ButtonInput<KeyCode>>>,
+    mut debug: ResMut<DebugSkeletons>,
+) {
+    if keys.is_some_and(|k| k.just_pressed(KeyCode::KeyD)) {
+        debug.0 = !debug.0;
+    }
+}
+
+/// Draws the last raw and filtered Kinect skeletons in world space.
+fn draw_debug_skeletons(
+    debug: Res<DebugSkeletons>,
+    motion: Option<Res<AvatarMotion>>,
+    avatar: Query<&Transform, With<Avatar>>,
+    mut gizmos: Gizmos,
+) {
+    let (true, Some(motion), Ok(avatar)) = (debug.0, motion, avatar.single()) else {
+        return;
+    };
+    let frames = [
+        (motion.last_raw.as_ref(), Color::srgb(0.95, 0.25, 0.2)),
+        (motion.last_filtered.as_ref(), Color::srgb(0.2, 0.9, 0.35)),
+    ];
+    for (frame, color) in frames {
+        let Some(frame) = frame else { continue };
+        for joint in KinectJoint::ALL {
+            let Some(parent) = joint.parent() else {
+                continue;
+            };
+            let a = avatar.transform_point(frame.joint(parent).position);
+            let b = avatar.transform_point(frame.joint(joint).position);
+            if a.is_finite() && b.is_finite() {
+                gizmos.line(a, b, color);
+            }
+        }
+    }
+}
+
 /// Marks the camera that frames the person.
 #[derive(Component)]
 pub struct MirrorCamera;
@@ -68,8 +110,13 @@ impl Plugin for KioskPlugin {
         app.init_state::<KioskState>()
             .init_resource::<KioskTimings>()
             .init_resource::<KioskStatus>()
+            .init_resource::<DebugSkeletons>()
             .add_systems(Update, (track_person, kiosk_transitions).chain())
+            .add_systems(Update, toggle_debug_skeletons)
             .add_systems(PostUpdate, frame_person);
+        if app.is_plugin_added::<bevy::gizmos::GizmoPlugin>() {
+            app.add_systems(PostUpdate, draw_debug_skeletons);
+        }
     }
 }
 
@@ -114,7 +161,7 @@ fn kiosk_transitions(
             && let Some(motion) = motion.as_mut()
         {
             // The next person is a new user: calibrate again (Algorithm 1, line 10).
-            motion.retargeter.reset();
+            motion.reset();
         }
         next.set(target);
         status.in_state_s = 0.0;
@@ -123,7 +170,7 @@ fn kiosk_transitions(
 
 /// The avatar's pelvis in world space, if there is an avatar with a pose.
 fn pelvis_world(motion: &AvatarMotion, avatar: &Transform) -> Option<Vec3> {
-    let pelvis = motion.retargeter.skeleton().index_of("pelvis")?;
+    let pelvis = motion.pipeline.skeleton().index_of("pelvis")?;
     let head = *motion.pose.heads.get(pelvis)?;
     Some(avatar.transform_point(head)).filter(|p| p.is_finite())
 }
@@ -203,6 +250,7 @@ pub mod ui {
         status: Res<KioskStatus>,
         feed: Res<SensorFeed>,
         motion: Option<Res<AvatarMotion>>,
+        debug: Res<super::DebugSkeletons>,
     ) -> Result {
         let fps = diagnostics
             .get(&FrameTimeDiagnosticsPlugin::FPS)
@@ -225,11 +273,23 @@ pub mod ui {
                         },
                         feed.frames_received
                     ));
-                    if let Some(motion) = motion.as_ref()
-                        && let Some(c) = motion.retargeter.calibration()
-                    {
-                        ui.label(format!("avatar/person leg ratio {:.2}", c.scale));
+                    if let Some(motion) = motion.as_ref() {
+                        if let Some(c) = motion.pipeline.retargeter().calibration() {
+                            ui.label(format!("avatar/person leg ratio {:.2}", c.scale));
+                        }
+                        let rejected = motion.gate.stats().rejected_total();
+                        if rejected > 0 {
+                            ui.colored_label(
+                                egui::Color32::from_rgb(230, 160, 60),
+                                format!("bad sensor frames ignored: {rejected}"),
+                            );
+                        }
                     }
+                    ui.label(if debug.0 {
+                        "skeletons: raw (red), filtered (green) — D hides"
+                    } else {
+                        "D: show the sensor skeletons"
+                    });
                     if *state.get() == KioskState::Calibrate {
                         ui.label(format!("measuring… {:.1} s", status.tracked_s));
                     }

@@ -5,6 +5,7 @@
 pub mod assets;
 pub mod headless;
 pub mod kiosk;
+pub mod motion_cli;
 pub mod timing;
 
 use std::{path::PathBuf, sync::Arc, time::Duration};
@@ -20,9 +21,13 @@ use bevy::{
 };
 use fitroom_body::{
     BodyModel,
-    plugin::{AvatarBody, BodyPlugin},
+    plugin::{AvatarBody, BodyPlugin, SensorPlacement},
 };
-use fitroom_motion::{RetargetOptions, Retargeter, plugin::AvatarMotion, plugin::MotionPlugin};
+use fitroom_motion::{
+    eval::AvatarPipeline,
+    filter::FilterKind,
+    plugin::{AvatarMotion, MotionPlugin},
+};
 use fitroom_sensor::{
     bvh::BvhClip,
     bvh_source::{BvhSource, BvhSourceOptions},
@@ -81,8 +86,11 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         .with_context(|| format!("cannot replay '{}'", options.motion.display()))?;
     let rest = model.rest_pose(&model.positions);
     let skeleton = fitroom_motion::avatar_skeleton(&model, &rest)?;
-    let retargeter = Retargeter::new(skeleton, RetargetOptions::default())?;
+    let floor_y = -source.options().sensor_height_m;
+    let pipeline = AvatarPipeline::new(&skeleton, floor_y)?;
+    let motion = AvatarMotion::new(pipeline, FilterKind::default().build());
 
+    let source_height = source.options().sensor_height_m;
     let mut app = App::new();
     let render = match options.mode {
         Mode::Kiosk { windowed } => {
@@ -138,7 +146,10 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             rest,
         })
         .insert_resource(ActiveSensor(Box::new(source)))
-        .insert_resource(AvatarMotion::new(retargeter))
+        .insert_resource(motion)
+        .insert_resource(SensorPlacement {
+            sensor_height_m: source_height,
+        })
         .add_plugins((
             SensorPlugin,
             MotionPlugin,

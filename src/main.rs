@@ -79,6 +79,38 @@ enum Command {
         #[command(subcommand)]
         command: BodyCommand,
     },
+    /// Motion pipeline tools.
+    Motion {
+        #[command(subcommand)]
+        command: MotionCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum MotionCommand {
+    /// Replay a clean clip through the Kinect noise model and the motion pipeline; report RMSE,
+    /// jitter, lag, bone-length spread, foot skating and joint-limit violations.
+    Eval {
+        /// The clean BVH clip.
+        #[arg(long)]
+        bvh: PathBuf,
+        /// `kinect` (the Kinect v1 model, view limits off) or `none`.
+        #[arg(long, default_value = "kinect")]
+        noise: String,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        /// none | holt | holt-smooth | holt-very-smooth | oneeuro | oneeuro-tuned | kalman
+        #[arg(long, default_value = "kalman")]
+        filter: String,
+        /// Draw raw, filtered and clean curves of the right elbow angle (PNG).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+        /// Converted body file (default: assets/bodies/makehuman.fitbody).
+        #[arg(long)]
+        body: Option<PathBuf>,
+    },
 }
 
 #[derive(Subcommand)]
@@ -207,6 +239,18 @@ fn run(cli: Cli) -> Result<()> {
         Command::Import {
             command: ImportCommand::Makehuman { dir, out },
         } => import_makehuman(&dir, &out)?,
+        Command::Motion {
+            command:
+                MotionCommand::Eval {
+                    bvh,
+                    noise,
+                    seed,
+                    filter,
+                    plot,
+                    json,
+                    body,
+                },
+        } => motion_eval(&bvh, &noise, seed, &filter, plot.as_deref(), json, body)?,
         Command::Body {
             command:
                 BodyCommand::TwistStudy {
@@ -273,6 +317,74 @@ fn import_makehuman(dir: &std::path::Path, out: &std::path::Path) -> Result<()> 
         model.targets.len(),
         start.elapsed().as_secs_f64()
     );
+    Ok(())
+}
+
+fn motion_eval(
+    bvh: &std::path::Path,
+    noise: &str,
+    seed: u64,
+    filter: &str,
+    plot: Option<&std::path::Path>,
+    json: bool,
+    body: Option<PathBuf>,
+) -> Result<()> {
+    use fitroom_motion::eval::{EvalOptions, FilterChoice, evaluate_clip, evaluation_noise};
+    let filter: FilterChoice = filter.parse().map_err(|e| {
+        anyhow::anyhow!(
+            "{e}; --filter accepts: none, holt, holt-smooth, holt-very-smooth, oneeuro, oneeuro-tuned, kalman"
+        )
+    })?;
+    let noise = match noise {
+        "kinect" => Some(evaluation_noise()),
+        "none" => None,
+        other => anyhow::bail!("unknown --noise '{other}': use kinect or none"),
+    };
+    let path = match body {
+        Some(p) => p,
+        None => fitroom::assets::assets_dir()?.join(fitroom::assets::DEFAULT_BODY),
+    };
+    let model = fitroom_body::BodyModel::read(&path)?;
+    let rest = model.rest_pose(&model.positions);
+    let skeleton = fitroom_motion::avatar_skeleton(&model, &rest)?;
+    let options = EvalOptions {
+        filter,
+        noise,
+        seed,
+        ..EvalOptions::default()
+    };
+    let evaluation = evaluate_clip(bvh, &skeleton, &options)?;
+    if let Some(plot) = plot {
+        fitroom::motion_cli::plot_joint_angle(&evaluation, plot)?;
+    }
+    let r = &evaluation.report;
+    if json {
+        println!("{}", serde_json::to_string_pretty(r)?);
+    } else {
+        println!(
+            "{} with {} (seed {}), {} frames\n\
+             position RMSE {:.1} mm (raw {:.1}); jitter {:.1} m/s² (raw {:.1}, clean {:.1}); lag {:.0} ms\n\
+             bone-length std {:.1} mm (raw {:.1}); avatar foot skating {:.1}% -> {:.1}% of frame pairs\n\
+             joint-limit violations {}; frames rejected {}; pipeline {:.1} µs per frame",
+            r.clip,
+            r.filter,
+            r.seed,
+            r.frames,
+            r.output.rmse_mm,
+            r.input.rmse_mm,
+            r.output.jitter_m_s2,
+            r.input.jitter_m_s2,
+            r.output.clean_jitter_m_s2,
+            r.output.lag_ms,
+            r.output.bone_std_mm,
+            r.input.bone_std_mm,
+            100.0 * r.avatar_foot_skate_input,
+            100.0 * r.avatar_foot_skate_output,
+            r.joint_limit_violations,
+            r.rejected_frames,
+            r.pipeline_us_per_frame
+        );
+    }
     Ok(())
 }
 
