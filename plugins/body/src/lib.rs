@@ -76,7 +76,9 @@ pub mod asset;
 mod codec;
 pub mod forearm;
 pub mod import;
+pub mod measure;
 pub mod model;
+pub mod modifiers;
 #[cfg(feature = "plugin")]
 pub mod plugin;
 pub mod rig;
@@ -85,6 +87,8 @@ pub mod skinning;
 pub use asset::{AssetError, FORMAT_VERSION, MAGIC};
 pub use forearm::{ForearmStudyError, ForearmTwistReport, forearm_twist_study};
 pub use import::{ImportError, ImportReport, import_makehuman, import_makehuman_with_report};
+pub use measure::{Landmarks, MeasureError, Measurements};
 pub use model::*;
+pub use modifiers::{Shape, ShapeError, ShapedBody};
 pub use rig::{bone_frame, compute_normals, vec_roll_to_mat3_normalized};
 pub use skinning::{RigidTransform, forward_kinematics, skin_positions};
