@@ -70,6 +70,13 @@ fn toggle_debug_skeletons(
     }
 }
 
+/// Debug skeletons are drawn over the avatar, not hidden inside it.
+fn skeletons_on_top(mut store: ResMut<bevy::gizmos::config::GizmoConfigStore>) {
+    let (config, _) = store.config_mut::<bevy::gizmos::config::DefaultGizmoConfigGroup>();
+    config.depth_bias = -1.0;
+    config.line.width = 3.0;
+}
+
 /// Draws the last raw and filtered Kinect skeletons in world space.
 fn draw_debug_skeletons(
     debug: Res<DebugSkeletons>,
@@ -115,7 +122,8 @@ impl Plugin for KioskPlugin {
             .add_systems(Update, toggle_debug_skeletons)
             .add_systems(PostUpdate, frame_person);
         if app.is_plugin_added::<bevy::gizmos::GizmoPlugin>() {
-            app.add_systems(PostUpdate, draw_debug_skeletons);
+            app.add_systems(Startup, skeletons_on_top)
+                .add_systems(PostUpdate, draw_debug_skeletons);
         }
     }
 }

@@ -29,8 +29,10 @@ use fitroom_motion::{
     plugin::{AvatarMotion, MotionPlugin},
 };
 use fitroom_sensor::{
+    SensorSource,
     bvh::BvhClip,
     bvh_source::{BvhSource, BvhSourceOptions},
+    noise::NoisySource,
     plugin::{ActiveSensor, SensorPlugin},
 };
 
@@ -53,6 +55,8 @@ pub struct AppOptions {
     pub motion: PathBuf,
     /// Offscreen image size for headless rendering.
     pub image_size: UVec2,
+    /// Replay the motion through the Kinect v1 noise model with this seed (`None`: clean).
+    pub noise_seed: Option<u64>,
 }
 
 impl AppOptions {
@@ -63,6 +67,7 @@ impl AppOptions {
             body: assets.join(assets::DEFAULT_BODY),
             motion: assets.join(assets::DEFAULT_MOTION),
             image_size: UVec2::new(960, 720),
+            noise_seed: None,
         })
     }
 }
@@ -91,6 +96,14 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     let motion = AvatarMotion::new(pipeline, FilterKind::default().build());
 
     let source_height = source.options().sensor_height_m;
+    let source: Box<dyn SensorSource> = match options.noise_seed {
+        Some(seed) => Box::new(NoisySource::new(
+            source,
+            &fitroom_motion::eval::evaluation_noise(),
+            seed,
+        )),
+        None => Box::new(source),
+    };
     let mut app = App::new();
     let render = match options.mode {
         Mode::Kiosk { windowed } => {
@@ -145,7 +158,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             model: Arc::new(model),
             rest,
         })
-        .insert_resource(ActiveSensor(Box::new(source)))
+        .insert_resource(ActiveSensor(source))
         .insert_resource(motion)
         .insert_resource(SensorPlacement {
             sensor_height_m: source_height,

@@ -29,6 +29,13 @@ struct Inputs {
     /// BVH clip that drives the avatar (default: the embedded assets/motions/walk.bvh).
     #[arg(long)]
     motion: Option<PathBuf>,
+    /// `kinect`: replay the clip through the Kinect v1 noise model (to see the filters work);
+    /// `none`: the clean recording.
+    #[arg(long, default_value = "none")]
+    noise: String,
+    /// Seed of the noise model.
+    #[arg(long, default_value_t = 1)]
+    seed: u64,
 }
 
 #[derive(Subcommand)]
@@ -44,6 +51,9 @@ enum Command {
         /// Frames to run before the screenshot.
         #[arg(long, default_value_t = 180)]
         frames: u32,
+        /// Start with the raw and filtered sensor skeletons drawn (the D key toggles them).
+        #[arg(long)]
+        skeletons: bool,
         #[command(flatten)]
         inputs: Inputs,
     },
@@ -153,11 +163,17 @@ fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         (b, m, Ok(d)) => (b.clone().unwrap_or(d.body), m.clone().unwrap_or(d.motion)),
         (_, _, Err(e)) => return Err(e),
     };
+    let noise_seed = match inputs.noise.as_str() {
+        "none" => None,
+        "kinect" => Some(inputs.seed),
+        other => anyhow::bail!("unknown --noise '{other}': use none or kinect"),
+    };
     Ok(AppOptions {
         mode,
         body,
         motion,
         image_size: UVec2::new(960, 720),
+        noise_seed,
     })
 }
 
@@ -176,18 +192,23 @@ fn run(cli: Cli) -> Result<()> {
         windowed: false,
         screenshot: None,
         frames: 180,
+        skeletons: false,
         inputs: Inputs {
             body: None,
             motion: None,
+            noise: "none".into(),
+            seed: 1,
         },
     }) {
         Command::Kiosk {
             windowed,
             screenshot,
             frames,
+            skeletons,
             inputs,
         } => {
             let mut app = build_app(&options(Mode::Kiosk { windowed }, &inputs)?)?;
+            app.insert_resource(fitroom::kiosk::DebugSkeletons(skeletons));
             if let Some(path) = screenshot {
                 app.add_systems(Update, screenshot_then_quit(path, frames));
             }
