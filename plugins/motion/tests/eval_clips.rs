@@ -2,32 +2,17 @@
 //! our filter against the Kinect SDK's Holt filter (default set) and the One Euro filter tuned
 //! with its authors' procedure; foot skating and joint limits of the corrected output.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 
-use fitroom_body::BodyModel;
 use fitroom_motion::{
     AvatarSkeleton,
     eval::{EvalOptions, EvalReport, FilterChoice, evaluate_clip},
 };
 
-fn shared_dir() -> PathBuf {
-    std::env::var_os("FITROOM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared").into())
-}
-
-fn skeleton() -> AvatarSkeleton {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../assets/bodies/makehuman.fitbody"
-    );
-    let model = BodyModel::read(Path::new(path)).expect("body asset");
-    let rest = model.rest_pose(&model.positions);
-    fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton")
-}
-
 fn clips() -> Vec<PathBuf> {
-    let dir = shared_dir().join("data/mocap/cmu");
+    let dir = common::shared_dir().join("data/mocap/cmu");
     let index = std::fs::read_to_string(dir.join("INDEX.tsv")).expect("INDEX.tsv");
     index
         .lines()
@@ -50,7 +35,7 @@ fn run(path: &Path, skeleton: &AvatarSkeleton, filter: &str) -> EvalReport {
 
 #[test]
 fn our_filter_beats_holt_and_one_euro_and_the_output_is_clean() {
-    let skeleton = skeleton();
+    let skeleton = common::skeleton();
     let mut wins = 0;
     let (mut skate_in, mut skate_out) = (0.0f32, 0.0f32);
     let mut violations = 0;

@@ -5,7 +5,7 @@
 //! 1.1 cm), about 1.5 cm per axis in all. Print the comparison table with
 //! `cargo test -p fitroom_motion --no-default-features --test filters -- --nocapture`.
 
-use std::path::PathBuf;
+mod common;
 
 use fitroom_motion::filter::{
     FilterKind, FrameGate, GateDecision, HoltFilter, HoltParams, JointFilter, KalmanFilter,
@@ -13,60 +13,11 @@ use fitroom_motion::filter::{
     kalman::KalmanModel, tune_one_euro,
 };
 use fitroom_motion::metrics::{self, FootSkateParams};
-use fitroom_sensor::{JointSample, KinectJoint, SensorFrame, bvh_source::BvhSource};
+use fitroom_sensor::{JointSample, KinectJoint, SensorFrame};
 use glam::{Quat, Vec3};
 
 // ---------------------------------------------------------------------------------------------
 // Data and noise
-
-fn shared_dir() -> PathBuf {
-    std::env::var_os("FITROOM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared").into())
-}
-
-fn cmu_dir() -> PathBuf {
-    shared_dir().join("data/mocap/cmu")
-}
-
-fn cmu_index() -> Vec<String> {
-    let text = std::fs::read_to_string(cmu_dir().join("INDEX.tsv")).expect("INDEX.tsv");
-    text.lines()
-        .skip(1)
-        .filter_map(|l| l.split('\t').next())
-        .filter(|f| f.ends_with(".bvh"))
-        .map(str::to_string)
-        .collect()
-}
-
-/// The clean 30 Hz stream of one loop of a clip.
-fn clean_frames(file: &str) -> Vec<SensorFrame> {
-    let source = BvhSource::load(cmu_dir().join(file), Default::default()).expect(file);
-    let n = (source.clip_duration_s() * 30.0).floor() as usize;
-    (0..=n).map(|k| source.frame_at(k as f64 / 30.0)).collect()
-}
-
-/// SplitMix64.
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-
-    fn uniform(&mut self) -> f64 {
-        ((self.next_u64() >> 11) as f64 + 0.5) / (1u64 << 53) as f64
-    }
-
-    fn gaussian(&mut self) -> f64 {
-        let (u1, u2) = (self.uniform(), self.uniform());
-        (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-    }
-}
 
 const WHITE_SIGMA: f64 = 0.010;
 const AR_SIGMA: f64 = 0.011;
@@ -84,7 +35,7 @@ fn add_noise_with(
     ar_sigma: f64,
     ar_rho: f64,
 ) -> Vec<SensorFrame> {
-    let mut rng = Rng(seed);
+    let mut rng = common::Rng(seed);
     let innovation = ar_sigma * (1.0 - ar_rho * ar_rho).sqrt();
     let mut ar = [[0.0f64; 3]; KinectJoint::COUNT];
     for state in ar.iter_mut().flatten() {
@@ -119,11 +70,11 @@ struct Clip {
 }
 
 fn clips() -> Vec<Clip> {
-    cmu_index()
+    common::cmu_index()
         .into_iter()
         .enumerate()
         .map(|(i, name)| {
-            let clean = clean_frames(&name);
+            let clean = common::clean_frames(&name);
             let noisy = add_noise(&clean, 1000 + i as u64);
             Clip { name, clean, noisy }
         })

@@ -4,9 +4,10 @@
 //! Run with `--nocapture` for the report tables (violation shares per joint, foot-skating
 //! ratios before/after, pelvis path deviation).
 
+mod common;
+
 use std::collections::BTreeMap;
 
-use fitroom_body::BodyModel;
 use fitroom_motion::footskate::{
     FootHeight, FootSkateCorrector, FootSkateOptions, SkateCriteria, estimate_floor, foot_skating,
 };
@@ -32,41 +33,9 @@ const WALKS: &[&str] = &[
 ];
 const DT: f32 = 1.0 / 30.0;
 
-fn body() -> BodyModel {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../assets/bodies/makehuman.fitbody"
-    );
-    BodyModel::read(std::path::Path::new(path))
-        .expect("body asset (create it with `fitroom import makehuman`)")
-}
-
-fn skeleton() -> AvatarSkeleton {
-    let model = body();
-    let rest = model.rest_pose(&model.positions);
-    fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton")
-}
-
-fn cmu_dir() -> std::path::PathBuf {
-    std::env::var_os("FITROOM_SHARED")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared").into())
-        .join("data/mocap/cmu")
-}
-
-fn cmu_index() -> Vec<String> {
-    let text = std::fs::read_to_string(cmu_dir().join("INDEX.tsv")).expect("INDEX.tsv");
-    text.lines()
-        .skip(1)
-        .filter_map(|l| l.split('\t').next())
-        .filter(|f| f.ends_with(".bvh"))
-        .map(String::from)
-        .collect()
-}
-
 /// One loop of a clip as 30 Hz sensor frames.
 fn frames(file: &str) -> Vec<SensorFrame> {
-    let clip = BvhClip::load(cmu_dir().join(file)).expect("clip parses");
+    let clip = BvhClip::load(common::cmu_dir().join(file)).expect("clip parses");
     let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
     let duration = source.clip_duration_s();
     let mut out = Vec::new();
@@ -83,29 +52,6 @@ fn retarget(sk: &AvatarSkeleton, frames: &[SensorFrame]) -> Vec<AvatarPose> {
     frames.iter().map(|f| r.update(f)).collect()
 }
 
-/// A small seeded generator (SplitMix64) with Gaussian samples (Box–Muller).
-struct Rng(u64);
-
-impl Rng {
-    fn next_u64(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f32 {
-        ((self.next_u64() >> 40) as f32 + 0.5) / (1u64 << 24) as f32
-    }
-    fn gauss(&mut self) -> f32 {
-        let (u, v) = (self.uniform(), self.uniform());
-        (-2.0 * u.ln()).sqrt() * (std::f32::consts::TAU * v).cos()
-    }
-    fn gauss3(&mut self) -> Vec3 {
-        Vec3::new(self.gauss(), self.gauss(), self.gauss())
-    }
-}
-
 /// Noise of the jittered runs: stationary standard deviation per axis and the AR(1)
 /// coefficient per 30 Hz frame (correlation time `-dt / ln(rho)` = 0.15 s).
 const JITTER_SIGMA_M: f32 = 0.015;
@@ -115,7 +61,7 @@ const JITTER_RHO: f32 = 0.8;
 /// orientation (by the shortest arc, as the BVH source aligns it) onto the jittered bone, so the
 /// retargeted limbs (orientations) and root (hip position) both see the noise.
 fn jitter(frames: &[SensorFrame], seed: u64) -> Vec<SensorFrame> {
-    let mut rng = Rng(seed);
+    let mut rng = common::Rng(seed);
     let mut state: Vec<Vec3> = (0..KinectJoint::COUNT)
         .map(|_| rng.gauss3() * JITTER_SIGMA_M)
         .collect();
@@ -222,7 +168,7 @@ fn limit_and_correct(
 
 #[test]
 fn two_bone_ik_is_exact_against_forward_kinematics() {
-    let mut rng = Rng(7);
+    let mut rng = common::Rng(7);
     let mut worst = 0.0f32;
     for case in 0..2000 {
         let l1 = 0.2 + 0.4 * rng.uniform();
@@ -290,14 +236,14 @@ fn two_bone_ik_is_exact_against_forward_kinematics() {
 
 #[test]
 fn limits_clamp_to_zero_violations_and_keep_allowed_rotations() {
-    let sk = skeleton();
+    let sk = common::skeleton();
     let limits = JointLimits::new(&sk, LimitOptions::default());
     assert_eq!(
         limits.joints().len(),
         21,
         "every limited bone exists on the MakeHuman rig"
     );
-    let mut rng = Rng(11);
+    let mut rng = common::Rng(11);
     for j in limits.joints() {
         for _ in 0..300 {
             // Random rotations anywhere: the clamped one is allowed and is a fixed point.
@@ -376,7 +322,7 @@ fn lerp(range: (f32, f32), t: f32) -> f32 {
 
 #[test]
 fn joint_axes_follow_the_anatomy_on_a_walk() {
-    let sk = skeleton();
+    let sk = common::skeleton();
     let limits = JointLimits::new(&sk, LimitOptions::default());
     println!("{}", limits.axes_report(&sk));
     let poses = retarget(&sk, &frames("07_01.bvh"));
@@ -420,13 +366,13 @@ fn joint_axes_follow_the_anatomy_on_a_walk() {
 
 #[test]
 fn limit_violation_shares_on_clean_mocap() {
-    let sk = skeleton();
+    let sk = common::skeleton();
     let limits = JointLimits::new(&sk, LimitOptions::default());
     // (bone, part) -> (frames, walking frames, max excess)
     let mut table: BTreeMap<(String, &str), (usize, usize, f32)> = BTreeMap::new();
     let (mut total, mut walk_total, mut any, mut walk_any) = (0usize, 0usize, 0usize, 0usize);
     let mut per_clip = Vec::new();
-    for file in cmu_index() {
+    for file in common::cmu_index() {
         let walking = WALKS.contains(&file.as_str());
         let poses = retarget(&sk, &frames(&file));
         let mut clip_any = 0;
@@ -537,7 +483,7 @@ fn walk_runs(sk: &AvatarSkeleton) -> Vec<WalkRun> {
 
 #[test]
 fn foot_skating_on_clean_and_jittered_walks() {
-    let sk = skeleton();
+    let sk = common::skeleton();
     let runs = walk_runs(&sk);
     println!(
         "jitter: Gaussian {} cm per axis and joint, AR(1) rho {} per 30 Hz frame, seeded; \
@@ -678,10 +624,10 @@ fn foot_skating_on_clean_and_jittered_walks() {
 
 #[test]
 fn the_whole_pipeline_is_finite_on_every_clip_and_keeps_bone_lengths() {
-    let sk = skeleton();
+    let sk = common::skeleton();
     let limits = JointLimits::new(&sk, LimitOptions::default());
     let criteria = SkateCriteria::default();
-    let index = cmu_index();
+    let index = common::cmu_index();
     assert_eq!(index.len(), 15);
     println!(
         "skating ratio (whole foot) input -> limits + foot skate | -> limits + smoothing (τ 0.05 s) \
@@ -737,7 +683,7 @@ fn the_whole_pipeline_is_finite_on_every_clip_and_keeps_bone_lengths() {
 
 #[test]
 fn the_corrector_survives_bad_input() {
-    let sk = skeleton();
+    let sk = common::skeleton();
     let mut corrector =
         FootSkateCorrector::new(sk.clone(), FootSkateOptions::default()).expect("corrector");
     let poses = retarget(&sk, &frames("07_01.bvh"));

@@ -3,7 +3,8 @@
 //! orientations -> Algorithm 1 -> the avatar's own skeleton); the performer's limbs come from
 //! the sensor's joint *positions*, a separate computation.
 
-use fitroom_body::BodyModel;
+mod common;
+
 use fitroom_motion::{RetargetOptions, Retargeter};
 use fitroom_sensor::{
     KinectJoint as K, SensorSource,
@@ -36,49 +37,20 @@ const LIMBS: &[(&str, Option<&str>, K, K)] = &[
     ("spine_03", None, K::Spine, K::ShoulderCenter),
 ];
 
-fn body() -> BodyModel {
-    let path = concat!(
-        env!("CARGO_MANIFEST_DIR"),
-        "/../../assets/bodies/makehuman.fitbody"
-    );
-    BodyModel::read(std::path::Path::new(path))
-        .expect("body asset (create it with `fitroom import makehuman`)")
-}
-
-fn shared_dir() -> std::path::PathBuf {
-    std::env::var_os("FITROOM_SHARED")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared").into())
-}
-
-fn cmu_dir() -> std::path::PathBuf {
-    shared_dir().join("data/mocap/cmu")
-}
-
-fn cmu_index() -> Vec<String> {
-    let text = std::fs::read_to_string(cmu_dir().join("INDEX.tsv")).expect("INDEX.tsv");
-    text.lines()
-        .skip(1)
-        .filter_map(|l| l.split('\t').next())
-        .filter(|f| f.ends_with(".bvh"))
-        .map(String::from)
-        .collect()
-}
-
 #[test]
 fn limb_bones_follow_the_source_limbs_on_every_clip() {
-    let model = body();
+    let model = common::body();
     let rest = model.rest_pose(&model.positions);
     let skeleton = fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton");
     let mut worst_overall = (0.0f32, String::new());
-    let index = cmu_index();
+    let index = common::cmu_index();
     assert_eq!(index.len(), 15);
     println!(
         "{:<11} {:>7} {:>9}  worst bone",
         "clip", "frames", "mean max°"
     );
     for file in index {
-        let clip = BvhClip::load(cmu_dir().join(&file)).expect("clip parses");
+        let clip = BvhClip::load(common::cmu_dir().join(&file)).expect("clip parses");
         let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
         let mut retargeter =
             Retargeter::new(skeleton.clone(), RetargetOptions::default()).expect("retargeter");
@@ -141,11 +113,11 @@ fn limb_bones_follow_the_source_limbs_on_every_clip() {
 
 #[test]
 fn low_confidence_joints_keep_their_last_good_orientation() {
-    let model = body();
+    let model = common::body();
     let rest = model.rest_pose(&model.positions);
     let skeleton = fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton");
     let mut retargeter = Retargeter::new(skeleton, RetargetOptions::default()).expect("retargeter");
-    let clip = BvhClip::load(cmu_dir().join("141_16.bvh")).expect("clip");
+    let clip = BvhClip::load(common::cmu_dir().join("141_16.bvh")).expect("clip");
     let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
     let frames = source.advance(2.0).expect("frames");
     let elbow = retargeter.skeleton().index_of("upperarm_r").expect("bone");
