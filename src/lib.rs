@@ -3,6 +3,7 @@
 //! commands; the logic lives in the `plugins/` crates.
 
 pub mod assets;
+pub mod body_cli;
 pub mod headless;
 pub mod kiosk;
 pub mod motion_cli;

@@ -145,6 +145,26 @@ enum ImportCommand {
 
 #[derive(Subcommand)]
 enum BodyCommand {
+    /// Measure a body (default shape, or a shape file): stature, inside leg, arm length,
+    /// shoulder width and the neck, bust, under-bust, waist, hip, thigh and calf girths.
+    Measure {
+        /// A shape file (RON), e.g. `(gender: 0.0, weight: 0.6)`.
+        #[arg(long)]
+        shape: Option<PathBuf>,
+        #[arg(long)]
+        body: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Write the shaped body in its rest pose (metres, +Y up) as OBJ.
+    Export {
+        #[arg(long)]
+        shape: Option<PathBuf>,
+        #[arg(long)]
+        out: PathBuf,
+        #[arg(long)]
+        body: Option<PathBuf>,
+    },
     /// Cross-section area of the forearm under a twist, single bone vs split (seed 000 §4.4.3).
     TwistStudy {
         #[arg(long, default_value_t = -90.0, allow_negative_numbers = true)]
@@ -260,6 +280,45 @@ fn run(cli: Cli) -> Result<()> {
         Command::Import {
             command: ImportCommand::Makehuman { dir, out },
         } => import_makehuman(&dir, &out)?,
+        Command::Body {
+            command: BodyCommand::Measure { shape, body, json },
+        } => {
+            let model = load_body(body)?;
+            let shape = fitroom::body_cli::load_shape(shape.as_deref())?;
+            let report = fitroom::body_cli::measure(&model, shape)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                let m = &report.measurements;
+                println!(
+                    "stature {:.1} cm, inside leg {:.1}, arm {:.1}, shoulders {:.1}\n\
+                     girths: neck {:.1}, bust {:.1}, under-bust {:.1}, waist {:.1}, hip {:.1}, thigh {:.1}, calf {:.1} cm\n\
+                     shape applied in {:.2} ms, measured in {:.0} ms",
+                    m.stature_cm,
+                    m.crotch_height_cm,
+                    m.arm_length_cm,
+                    m.shoulder_width_cm,
+                    m.neck_cm,
+                    m.bust_cm,
+                    m.underbust_cm,
+                    m.waist_cm,
+                    m.hip_cm,
+                    m.thigh_cm,
+                    m.calf_cm,
+                    report.shape_ms,
+                    report.measure_ms
+                );
+            }
+        }
+        Command::Body {
+            command: BodyCommand::Export { shape, out, body },
+        } => {
+            let model = load_body(body)?;
+            let shape = fitroom::body_cli::load_shape(shape.as_deref())?;
+            let (shaped, _) = fitroom::body_cli::shaped(&model, &shape)?;
+            fitroom::body_cli::write_obj(&model, &shaped, &out)?;
+            println!("wrote {}", out.display());
+        }
         Command::Motion {
             command:
                 MotionCommand::Eval {
@@ -407,6 +466,14 @@ fn motion_eval(
         );
     }
     Ok(())
+}
+
+fn load_body(body: Option<PathBuf>) -> Result<fitroom_body::BodyModel> {
+    let path = match body {
+        Some(p) => p,
+        None => fitroom::assets::assets_dir()?.join(fitroom::assets::DEFAULT_BODY),
+    };
+    Ok(fitroom_body::BodyModel::read(&path)?)
 }
 
 fn print_twist_study(r: &fitroom_body::ForearmTwistReport) {
