@@ -11,6 +11,10 @@
 //!   morph target application; vertex normals.
 //! - [`skinning`]: forward kinematics and CPU linear blend skinning.
 //! - [`forearm`]: the forearm-twist cross-section study (seed 000 Figure 4.3).
+//! - [`segments`]: anthropometric segments, propagation and segment-local morphing, and the
+//!   roughness measure with its study (seed 002 §4.3-4.4, §7.1).
+//! - [`sizing`]: size charts as RON data files (EN 13402, seed 002 Tables 4.2/4.3) and a size
+//!   recommendation from [`Measurements`].
 //!
 //! # Spaces and units
 //!
@@ -72,8 +76,10 @@
 //! CRC, decodes, and then checks indices and lengths ([`BodyModel::validate`]). Any change to
 //! the payload layout bumps [`FORMAT_VERSION`].
 
+pub mod ansur;
 pub mod asset;
 mod codec;
+pub mod fit;
 pub mod forearm;
 pub mod import;
 pub mod measure;
@@ -82,13 +88,25 @@ pub mod modifiers;
 #[cfg(feature = "plugin")]
 pub mod plugin;
 pub mod rig;
+pub mod segments;
+pub mod sizing;
 pub mod skinning;
 
 pub use asset::{AssetError, FORMAT_VERSION, MAGIC};
+pub use fit::{FitError, FitOptions, FitReport, FitRequest, fit};
 pub use forearm::{ForearmStudyError, ForearmTwistReport, forearm_twist_study};
 pub use import::{ImportError, ImportReport, import_makehuman, import_makehuman_with_report};
-pub use measure::{Landmarks, MeasureError, Measurements};
+pub use measure::{Landmarks, Measure, MeasureError, Measurements};
 pub use model::*;
 pub use modifiers::{Shape, ShapeError, ShapedBody};
 pub use rig::{bone_frame, compute_normals, vec_roll_to_mat3_normalized};
+pub use segments::{
+    AreaBlend, BodySegment, BodySegmentation, Decay, GirthEdit, MeshGraph, Propagation,
+    RoughnessCurve, RoughnessStudy, RoughnessStudyConfig, SegmentEdit, SegmentError, SegmentMorph,
+    SegmentTarget, SegmentWeights, StudyTarget, edit_waist_girth, roughness_study,
+};
+pub use sizing::{
+    ChartProblem, FitAtSize, Gender, MeasureAdvice, Placement, RangeCm, Recommendation, Size,
+    SizeChart, SizeChartError, SizeRange, recommend, recommend_with,
+};
 pub use skinning::{RigidTransform, forward_kinematics, skin_positions};

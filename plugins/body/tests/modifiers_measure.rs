@@ -246,11 +246,28 @@ fn base_mesh_against_makehuman() {
     // (between the breasts, the spine's groove, the buttocks' cleft) like a tape measure, so it
     // is a little shorter than the loop along the skin, and our landmarks are searched rather
     // than fixed, so the heights differ a little too.
+    // Our chest girth is EN 13402's (the largest girth under the armpits): on this flat-chested
+    // neutral body that is just under the armpits, above MakeHuman's loop, which runs over the
+    // bust points. At the bust points (our `bust_point` landmark) our hull agrees with it.
+    let floor0 = m.positions[..m.body_vertex_count as usize]
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min);
+    let at_bust_point: Vec<Vec2> = cross_section(
+        &m.positions[..m.body_vertex_count as usize],
+        &m.triangles,
+        &Plane::horizontal(floor0 + r.landmarks.bust_point_cm / 100.0),
+    )
+    .iter()
+    .filter(|l| l.centroid().x.abs() < 0.2)
+    .flat_map(|l| l.points.clone())
+    .collect();
+    let bust_point_girth = hull_perimeter(&at_bust_point) * 100.0;
     assert!(
-        r.bust_cm > 80.4 - 3.0 && r.bust_cm < 80.4 + 0.5,
-        "{}",
-        r.bust_cm
+        bust_point_girth > 80.4 - 3.0 && bust_point_girth < 80.4 + 0.5,
+        "{bust_point_girth}"
     );
+    assert!(r.bust_cm >= bust_point_girth - 0.01, "{}", r.bust_cm);
     assert!(
         r.hip_cm > 97.4 - 3.0 && r.hip_cm < 97.4 + 0.5,
         "{}",
@@ -399,15 +416,23 @@ fn gender_makes_female_and_male_bodies() {
     assert!(rf > rm + 0.05, "hip/bust female {rf} male {rm}");
     // Waist-to-hip: smaller for the female body.
     assert!(female.waist_cm / female.hip_cm < male.waist_cm / male.hip_cm - 0.05);
-    // The bust stands out of the under-bust more for the female body.
+    // The female chest girth is largest over the bust points; the male one just under the
+    // armpits, well above his bust point.
+    let (lf, lm) = (&female.landmarks, &male.landmarks);
     assert!(
-        female.bust_cm - female.underbust_cm > male.bust_cm - male.underbust_cm,
-        "female {} / {}, male {} / {}",
-        female.bust_cm,
-        female.underbust_cm,
-        male.bust_cm,
-        male.underbust_cm
+        (lf.bust_cm - lf.bust_point_cm).abs() < 2.0,
+        "female bust girth at {} cm, bust point at {} cm",
+        lf.bust_cm,
+        lf.bust_point_cm
     );
+    assert!(
+        lm.bust_cm > lm.bust_point_cm + 2.0 && lm.axilla_cm - lm.bust_cm < 2.0,
+        "male chest girth at {} cm, bust point {} cm, armpits {} cm",
+        lm.bust_cm,
+        lm.bust_point_cm,
+        lm.axilla_cm
+    );
+    assert!(female.bust_cm - female.underbust_cm > 5.0);
 }
 
 #[test]
