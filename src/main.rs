@@ -156,7 +156,58 @@ enum BodyCommand {
         #[arg(long)]
         json: bool,
     },
-    /// Write the shaped body in its rest pose (metres, +Y up) as OBJ.
+    /// Fit a body to measurements (cm): bounded least squares over the MakeHuman sliders.
+    Fit {
+        /// female or male.
+        #[arg(long)]
+        gender: String,
+        /// Age in years (18-90; default 25).
+        #[arg(long)]
+        age: Option<f32>,
+        #[command(flatten)]
+        measurements: fitroom::body_cli::MeasurementArgs,
+        /// Save the fitted shape (RON) here.
+        #[arg(long)]
+        out: Option<PathBuf>,
+        #[arg(long)]
+        body: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Recommend a size of a size chart for a body (default shape, or a shape file).
+    Size {
+        /// A size chart (RON), e.g. assets/sizecharts/en13402-female-seed002.ron.
+        #[arg(long)]
+        chart: PathBuf,
+        #[arg(long)]
+        shape: Option<PathBuf>,
+        #[arg(long)]
+        body: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// Fit ANSUR II subjects (all, or a seeded sample per sex) and report the errors.
+    Ansur {
+        /// The folder with ANSUR_II_FEMALE_Public.csv and ANSUR_II_MALE_Public.csv.
+        #[arg(long, default_value = "../shared/data/ansur2")]
+        data: PathBuf,
+        /// Subjects per sex (a seeded random sample); all 6,068 when absent.
+        #[arg(long)]
+        per_sex: Option<usize>,
+        #[arg(long, default_value_t = 1)]
+        seed: u64,
+        #[arg(long, default_value_t = 2)]
+        threads: usize,
+        /// Write the whole report (every subject) as JSON here.
+        #[arg(long)]
+        report: Option<PathBuf>,
+        /// Write the summary (Markdown) here.
+        #[arg(long)]
+        summary: Option<PathBuf>,
+        #[arg(long)]
+        body: Option<PathBuf>,
+    },
+    /// Write the shaped body in its rest pose (metres, +Y up) as OBJ or glb (by extension).
     Export {
         #[arg(long)]
         shape: Option<PathBuf>,
@@ -316,8 +367,79 @@ fn run(cli: Cli) -> Result<()> {
             let model = load_body(body)?;
             let shape = fitroom::body_cli::load_shape(shape.as_deref())?;
             let (shaped, _) = fitroom::body_cli::shaped(&model, &shape)?;
-            fitroom::body_cli::write_obj(&model, &shaped, &out)?;
+            fitroom::body_cli::export(&model, &shaped, &out)?;
             println!("wrote {}", out.display());
+        }
+        Command::Body {
+            command:
+                BodyCommand::Fit {
+                    gender,
+                    age,
+                    measurements,
+                    out,
+                    body,
+                    json,
+                },
+        } => {
+            let gender = fitroom::body_cli::parse_gender(&gender)?;
+            let model = load_body(body)?;
+            let report =
+                fitroom::body_cli::fit(&model, gender, age, &measurements, out.as_deref())?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&report)?);
+            } else {
+                print!("{}", fitroom::body_cli::fit_table(&report));
+                if let Some(out) = out {
+                    println!("shape saved to {}", out.display());
+                }
+            }
+        }
+        Command::Body {
+            command:
+                BodyCommand::Size {
+                    chart,
+                    shape,
+                    body,
+                    json,
+                },
+        } => {
+            let model = load_body(body)?;
+            let shape = fitroom::body_cli::load_shape(shape.as_deref())?;
+            let answer = fitroom::body_cli::size(&model, &chart, shape)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&answer)?);
+            } else {
+                println!("{}: {}", answer.chart, answer.recommendation);
+            }
+        }
+        Command::Body {
+            command:
+                BodyCommand::Ansur {
+                    data,
+                    per_sex,
+                    seed,
+                    threads,
+                    report,
+                    summary,
+                    body,
+                },
+        } => {
+            let model = load_body(body)?;
+            let r = fitroom::body_cli::ansur(&model, &data, per_sex, seed, threads)?;
+            let title = match per_sex {
+                Some(n) => format!("ANSUR II, {n} random subjects per sex (seed {seed})"),
+                None => "ANSUR II, all subjects".to_owned(),
+            };
+            let md = fitroom::body_cli::ansur_markdown(&r, &title);
+            if let Some(path) = report {
+                std::fs::write(&path, serde_json::to_string_pretty(&r)?)
+                    .with_context(|| format!("cannot write the report '{}'", path.display()))?;
+            }
+            if let Some(path) = summary {
+                std::fs::write(&path, &md)
+                    .with_context(|| format!("cannot write the summary '{}'", path.display()))?;
+            }
+            print!("{md}");
         }
         Command::Motion {
             command:
