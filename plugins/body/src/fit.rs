@@ -78,7 +78,7 @@ impl Default for FitOptions {
             tolerance_cm: 0.5,
             converged_cm: 0.1,
             prior_weight: 1e-3,
-            max_outer: 5,
+            max_outer: 6,
             max_inner: 12,
         }
     }
@@ -442,8 +442,19 @@ impl Fitter<'_> {
         probe: &MeasureProbe,
         morph: &mut ProbeMorph,
         options: &FitOptions,
+        trust: f32,
     ) -> Result<(Vec<f32>, usize), FitError> {
         let (m, n) = (self.measures.len(), self.params.len());
+        // The sliders' bounds, within `trust` of the start.
+        let bounds: Vec<(f32, f32)> = self
+            .params
+            .iter()
+            .zip(&x)
+            .map(|(p, &v)| {
+                let (lo, hi) = p.bounds();
+                (lo.max(v - trust), hi.min(v + trust))
+            })
+            .collect();
         let mut r = self.residuals(&x, probe, morph)?;
         // Forward differences, stepping away from the nearer bound.
         let mut jac = vec![0.0f64; m * n];
@@ -478,7 +489,7 @@ impl Fitter<'_> {
             // Active set: at a bound with the descent direction pointing out.
             let free: Vec<usize> = (0..n)
                 .filter(|&k| {
-                    let (lo, hi) = self.params[k].bounds();
+                    let (lo, hi) = bounds[k];
                     !((x[k] <= lo && grad[k] > 0.0) || (x[k] >= hi && grad[k] < 0.0))
                 })
                 .collect();
@@ -513,7 +524,7 @@ impl Fitter<'_> {
                 };
                 let mut xn = x.clone();
                 for (p, &k) in free.iter().enumerate() {
-                    let (lo, hi) = self.params[k].bounds();
+                    let (lo, hi) = bounds[k];
                     xn[k] = (x[k] + (delta[p] * scale) as f32).clamp(lo, hi);
                 }
                 let rn = self.residuals(&xn, probe, morph)?;
@@ -592,9 +603,20 @@ pub fn fit(
         evaluations: 0,
     };
 
+    // The outer loop: a full measurement (new landmarks and probe) at each trial; a trial that
+    // is worse than the best so far (the landmarks moved against the probe's prediction) is
+    // retried from the best with half the trust radius.
+    struct Best {
+        cost: f64,
+        x: Vec<f32>,
+        measured: Measurements,
+        probe: MeasureProbe,
+        positions: Vec<Vec3>,
+    }
     let mut x = prior;
-    let mut best: Option<(f64, Vec<f32>, Measurements)> = None;
+    let mut best: Option<Best> = None;
     let (mut outer, mut iterations) = (0, 0);
+    let mut trust = 1.0f32;
     loop {
         let shape = fitter.shape(&x);
         let body = model.shaped(&shape)?;
@@ -607,19 +629,34 @@ pub fn fit(
             .collect();
         let cost = fitter.cost(&r, &x);
         let worst = r.iter().fold(0.0f64, |a, v| a.max(v.abs()));
-        let improved = best.as_ref().is_none_or(|b| cost < b.0);
-        if improved {
-            best = Some((cost, x.clone(), measured));
+        if best.as_ref().is_none_or(|b| cost < b.cost) {
+            best = Some(Best {
+                cost,
+                x: x.clone(),
+                measured,
+                probe,
+                positions: body.positions,
+            });
+        } else {
+            trust *= 0.5;
         }
-        if worst < options.converged_cm as f64 || !improved || outer >= options.max_outer {
+        if worst < options.converged_cm as f64 || trust < 0.1 || outer >= options.max_outer {
             break;
         }
-        let mut morph = ProbeMorph::new(model, probe.vertices(), &body.positions);
-        let (xn, steps) = fitter.inner(x.clone(), &probe, &mut morph, options)?;
+        let Some(b) = best.as_ref() else {
+            break;
+        };
+        let mut morph = ProbeMorph::new(model, b.probe.vertices(), &b.positions);
+        let (xn, steps) = fitter.inner(b.x.clone(), &b.probe, &mut morph, options, trust)?;
         iterations += steps;
         x = xn;
     }
-    let Some((_, x, achieved)) = best else {
+    let Some(Best {
+        x,
+        measured: achieved,
+        ..
+    }) = best
+    else {
         return Err(FitError::NoTargets);
     };
     let residuals_cm: BTreeMap<Measure, f32> = request
