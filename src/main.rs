@@ -207,6 +207,17 @@ enum BodyCommand {
         #[arg(long)]
         body: Option<PathBuf>,
     },
+    /// Segment-local morphing: roughness against interpolation per propagation depth (seed
+    /// 002 Figs. 7.3-7.5), as a table, JSON or a plot.
+    Roughness {
+        /// Draw the Gaussian-propagation curves (PNG).
+        #[arg(long)]
+        plot: Option<PathBuf>,
+        #[arg(long)]
+        body: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
     /// Write the shaped body in its rest pose (metres, +Y up) as OBJ or glb (by extension).
     Export {
         #[arg(long)]
@@ -391,6 +402,23 @@ fn run(cli: Cli) -> Result<()> {
                 print!("{}", fitroom::body_cli::fit_table(&report));
                 if let Some(out) = out {
                     println!("shape saved to {}", out.display());
+                }
+            }
+        }
+        Command::Body {
+            command: BodyCommand::Roughness { plot, body, json },
+        } => {
+            let model = load_body(body)?;
+            let study = fitroom::body_cli::roughness(&model)?;
+            if let Some(path) = &plot {
+                fitroom::body_cli::plot_roughness(&study, path)?;
+            }
+            if json {
+                println!("{}", serde_json::to_string_pretty(&study)?);
+            } else {
+                print!("{}", study.table());
+                if let Some(path) = plot {
+                    println!("plot: {}", path.display());
                 }
             }
         }
