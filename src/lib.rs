@@ -4,6 +4,7 @@
 
 pub mod assets;
 pub mod body_cli;
+pub mod body_panel;
 pub mod headless;
 pub mod kiosk;
 pub mod motion_cli;
@@ -21,8 +22,8 @@ use bevy::{
     winit::WinitPlugin,
 };
 use fitroom_body::{
-    BodyModel,
-    plugin::{AvatarBody, BodyPlugin, SensorPlacement},
+    BodyModel, Shape,
+    plugin::{AvatarBody, AvatarShape, BodyPlugin, BodySystems, SensorPlacement},
 };
 use fitroom_motion::{
     eval::AvatarPipeline,
@@ -58,6 +59,12 @@ pub struct AppOptions {
     pub image_size: UVec2,
     /// Replay the motion through the Kinect v1 noise model with this seed (`None`: clean).
     pub noise_seed: Option<u64>,
+    /// The avatar's body shape (`None`: MakeHuman's default body).
+    pub shape: Option<Shape>,
+    /// Where the body panel saves the shape (`shape.ron` by default).
+    pub shape_path: PathBuf,
+    /// Open the body panel at start.
+    pub body_panel: bool,
 }
 
 impl AppOptions {
@@ -69,6 +76,9 @@ impl AppOptions {
             motion: assets.join(assets::DEFAULT_MOTION),
             image_size: UVec2::new(960, 720),
             noise_seed: None,
+            shape: None,
+            shape_path: PathBuf::from("shape.ron"),
+            body_panel: false,
         })
     }
 }
@@ -90,8 +100,18 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         .with_context(|| format!("cannot load the motion '{}'", options.motion.display()))?;
     let source = BvhSource::from_clip(clip, BvhSourceOptions::default())
         .with_context(|| format!("cannot replay '{}'", options.motion.display()))?;
-    let rest = model.rest_pose(&model.positions);
-    let skeleton = fitroom_motion::avatar_skeleton(&model, &rest)?;
+    let model = Arc::new(model);
+    let shape = options.shape.clone().unwrap_or_default();
+    let body = match &options.shape {
+        Some(s) => AvatarBody::shaped(
+            model.clone(),
+            model
+                .shaped(s)
+                .context("cannot shape the body with the given shape")?,
+        ),
+        None => AvatarBody::unshaped(model.clone()),
+    };
+    let skeleton = fitroom_motion::avatar_skeleton(&model, &body.rest)?;
     let floor_y = -source.options().sensor_height_m;
     let pipeline = AvatarPipeline::new(&skeleton, floor_y)?;
     let motion = AvatarMotion::new(pipeline, FilterKind::default().build());
@@ -155,9 +175,12 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     }
 
     app.insert_resource(LoadTimings { body_load_ms })
-        .insert_resource(AvatarBody {
-            model: Arc::new(model),
-            rest,
+        .insert_resource(body)
+        .insert_resource(AvatarShape(shape))
+        .insert_resource(body_panel::BodyPanel {
+            open: options.body_panel,
+            shape_path: options.shape_path.clone(),
+            ..Default::default()
         })
         .insert_resource(ActiveSensor(source))
         .insert_resource(motion)
@@ -172,7 +195,8 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             },
             kiosk::KioskPlugin,
             timing::TimingPlugin,
-        ));
+        ))
+        .add_systems(Update, follow_body_shape.after(BodySystems::Reshape));
 
     if render {
         app.insert_resource(ClearColor(BACKGROUND))
@@ -195,9 +219,33 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         );
     }
     if matches!(options.mode, Mode::Kiosk { .. }) {
-        app.add_plugins(kiosk::ui::OverlayPlugin);
+        app.add_plugins((kiosk::ui::OverlayPlugin, body_panel::BodyPanelPlugin));
     }
     Ok(app)
+}
+
+/// A reshaped body has other bone lengths: the motion pipeline is rebuilt on the new
+/// skeleton (the filter keeps its state; the retargeter calibrates again).
+fn follow_body_shape(
+    body: Option<Res<AvatarBody>>,
+    placement: Res<SensorPlacement>,
+    motion: Option<ResMut<AvatarMotion>>,
+) {
+    let (Some(body), Some(mut motion)) = (body, motion) else {
+        return;
+    };
+    if !body.is_changed() || body.is_added() {
+        return;
+    }
+    let pipeline = fitroom_motion::avatar_skeleton(&body.model, &body.rest)
+        .map_err(|e| e.to_string())
+        .and_then(|skeleton| {
+            AvatarPipeline::new(&skeleton, -placement.sensor_height_m).map_err(|e| e.to_string())
+        });
+    match pipeline {
+        Ok(pipeline) => motion.replace_pipeline(pipeline),
+        Err(e) => error!("the motion keeps the old skeleton: {e}"),
+    }
 }
 
 /// How long loading the inputs took.

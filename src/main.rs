@@ -36,6 +36,13 @@ struct Inputs {
     /// Seed of the noise model.
     #[arg(long, default_value_t = 1)]
     seed: u64,
+    /// The avatar's body shape (RON, e.g. from `fitroom body fit --out`); the body panel (B)
+    /// saves to this file too.
+    #[arg(long)]
+    shape: Option<PathBuf>,
+    /// Open the body panel at start.
+    #[arg(long)]
+    body_panel: bool,
 }
 
 #[derive(Subcommand)]
@@ -250,12 +257,30 @@ fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         "kinect" => Some(inputs.seed),
         other => anyhow::bail!("unknown --noise '{other}': use none or kinect"),
     };
+    let shape = match &inputs.shape {
+        Some(path) if path.exists() => Some(fitroom::body_cli::load_shape(Some(path))?),
+        Some(path) => {
+            eprintln!(
+                "note: the shape file '{}' does not exist yet: the default body; the body \
+                 panel (B) saves there",
+                path.display()
+            );
+            None
+        }
+        None => None,
+    };
     Ok(AppOptions {
         mode,
         body,
         motion,
         image_size: UVec2::new(960, 720),
         noise_seed,
+        shape,
+        shape_path: inputs
+            .shape
+            .clone()
+            .unwrap_or_else(|| PathBuf::from("shape.ron")),
+        body_panel: inputs.body_panel,
     })
 }
 
@@ -280,6 +305,8 @@ fn run(cli: Cli) -> Result<()> {
             motion: None,
             noise: "none".into(),
             seed: 1,
+            shape: None,
+            body_panel: false,
         },
     }) {
         Command::Kiosk {

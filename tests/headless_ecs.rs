@@ -95,3 +95,109 @@ fn avatar_root_travels_the_clips_path() {
         );
     }
 }
+
+/// The avatar shaped from a shape file at start, then reshaped live (what the body panel's
+/// sliders do): the body, its measurements, the joints and the motion skeleton all follow.
+#[test]
+fn the_avatar_takes_a_shape_and_reshapes_live() {
+    use bevy::prelude::*;
+    use fitroom_body::{
+        Shape,
+        plugin::{AvatarBody, AvatarJoint, AvatarMeasurements, AvatarShape},
+    };
+    use fitroom_motion::plugin::AvatarMotion;
+
+    let tall = Shape {
+        gender: 1.0,
+        height: 0.8,
+        ..Shape::default()
+    };
+    let mut options =
+        AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets exist");
+    options.shape = Some(tall.clone());
+    let mut app = fitroom::build_app(&options).expect("app");
+    for _ in 0..10 {
+        app.update();
+    }
+    let model = app.world().resource::<AvatarBody>().model.clone();
+    let expected = model
+        .measure(&model.shaped(&tall).expect("shape").positions)
+        .expect("measure");
+    let measured = app
+        .world()
+        .resource::<AvatarMeasurements>()
+        .measurements
+        .clone()
+        .expect("the avatar is measured");
+    assert!((measured.stature_cm - expected.stature_cm).abs() < 1e-3);
+    let thigh = model.bone_index("thigh_l").expect("thigh_l");
+    let calf = model.bone_index("calf_l").expect("calf_l");
+    let leg = |app: &App| {
+        let motion = app.world().resource::<AvatarMotion>();
+        motion.pipeline.skeleton().bones[calf]
+            .local_translation
+            .length()
+    };
+    let tall_leg = leg(&app);
+    let tall_thigh_rest = app.world().resource::<AvatarBody>().rest.heads[thigh];
+
+    // Reshape to a short woman, as the panel does.
+    let short = Shape {
+        gender: 0.0,
+        height: 0.2,
+        ..Shape::default()
+    };
+    app.world_mut().resource_mut::<AvatarShape>().0 = short.clone();
+    for _ in 0..5 {
+        app.update();
+    }
+    let short_measured = app
+        .world()
+        .resource::<AvatarMeasurements>()
+        .measurements
+        .clone()
+        .expect("measured");
+    let expected = model
+        .measure(&model.shaped(&short).expect("shape").positions)
+        .expect("measure");
+    assert!((short_measured.stature_cm - expected.stature_cm).abs() < 1e-3);
+    assert!(short_measured.stature_cm < measured.stature_cm - 15.0);
+    // The motion pipeline runs on the new, shorter skeleton.
+    let short_leg = leg(&app);
+    assert!(
+        short_leg < tall_leg - 0.03,
+        "thigh {tall_leg} -> {short_leg}"
+    );
+    assert_ne!(
+        app.world().resource::<AvatarBody>().rest.heads[thigh],
+        tall_thigh_rest
+    );
+    // The joints still move (the pipeline recalibrated and drives them).
+    let mut q = app.world_mut().query::<(&AvatarJoint, &Transform)>();
+    let before: Vec<Transform> = q.iter(app.world()).map(|(_, t)| *t).collect();
+    for _ in 0..30 {
+        app.update();
+    }
+    let mut q = app.world_mut().query::<(&AvatarJoint, &Transform)>();
+    let after: Vec<Transform> = q.iter(app.world()).map(|(_, t)| *t).collect();
+    assert!(before.iter().zip(&after).any(|(a, b)| a != b));
+    assert!(after.iter().all(|t| t.translation.is_finite()));
+
+    // A shape out of range keeps the body and says why.
+    app.world_mut().resource_mut::<AvatarShape>().0 = Shape {
+        weight: 3.0,
+        ..Shape::default()
+    };
+    app.update();
+    let m = app.world().resource::<AvatarMeasurements>();
+    assert!(
+        m.error.as_deref().is_some_and(|e| e.contains("weight")),
+        "{:?}",
+        m.error
+    );
+    let still = app.world().resource::<AvatarBody>().rest.heads[thigh];
+    assert_eq!(
+        still,
+        model.shaped(&short).expect("shape").rest_pose.heads[thigh]
+    );
+}

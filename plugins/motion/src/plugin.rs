@@ -72,6 +72,12 @@ impl AvatarMotion {
         true
     }
 
+    /// A new avatar skeleton (the body was reshaped): the pose stays until the next frame.
+    pub fn replace_pipeline(&mut self, pipeline: AvatarPipeline) {
+        self.pipeline = pipeline;
+        self.last_timestamp = None;
+    }
+
     /// A new user: calibrate again and restart the filter.
     pub fn reset(&mut self) {
         self.pipeline.reset();
