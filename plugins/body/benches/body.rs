@@ -110,7 +110,10 @@ fn bench_body(c: &mut Criterion) {
 
     let mut g = c.benchmark_group("fit");
     g.sample_size(10).measurement_time(Duration::from_secs(8));
-    for (name, request) in [("median_woman", median_woman()), ("median_man", median_man())] {
+    for (name, request) in [
+        ("median_woman", median_woman()),
+        ("median_man", median_man()),
+    ] {
         let report = fit(&model, &request, &FitOptions::default()).expect("fit");
         assert!(report.reachable, "{name}: {:?}", report.residuals_cm);
         g.bench_function(format!("nine_measurements_{name}"), |b| {
