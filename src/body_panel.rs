@@ -128,6 +128,17 @@ fn body_panel(
                             }
                         }
                     });
+                    egui::CollapsingHeader::new("region scale sliders").show(ui, |ui| {
+                        for name in Shape::region_names(&body.model) {
+                            let mut v = edited.regions.get(&name).copied().unwrap_or(0.0);
+                            slider(ui, &name, &mut v, -1.0..=1.0);
+                            if v == 0.0 {
+                                edited.regions.remove(&name);
+                            } else {
+                                edited.regions.insert(name, v);
+                            }
+                        }
+                    });
                     if ui.button("reset to the default body").clicked() {
                         edited = Shape::default();
                     }

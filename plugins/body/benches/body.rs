@@ -49,6 +49,7 @@ fn full_shape() -> Shape {
             .iter()
             .map(|&(k, v)| (k.to_owned(), v))
             .collect::<BTreeMap<_, _>>(),
+        regions: BTreeMap::new(),
     }
 }
 

@@ -5,7 +5,8 @@
 //! # Method
 //!
 //! Bounded, regularised non-linear least squares over the macro sliders `height`, `weight`,
-//! `muscle`, `proportions` (0..=1) and the `measure-*` sliders (-1..=1) that move the requested
+//! `muscle`, `proportions` (0..=1), the `measure-*` sliders and the region scale sliders
+//! (`neck-scale-horiz`, `torso-scale-depth`, ...; each -1..=1) that move the requested
 //! measurements:
 //!
 //! ```text
@@ -144,19 +145,20 @@ enum Param {
     Muscle,
     Proportions,
     Slider(&'static str),
+    Region(&'static str),
 }
 
 impl Param {
     fn bounds(self) -> (f32, f32) {
         match self {
-            Param::Slider(_) => (-1.0, 1.0),
+            Param::Slider(_) | Param::Region(_) => (-1.0, 1.0),
             _ => (0.0, 1.0),
         }
     }
 
     fn rest(self) -> f32 {
         match self {
-            Param::Slider(_) => 0.0,
+            Param::Slider(_) | Param::Region(_) => 0.0,
             _ => 0.5,
         }
     }
@@ -168,6 +170,7 @@ impl Param {
             Param::Muscle => "muscle".into(),
             Param::Proportions => "proportions".into(),
             Param::Slider(s) => format!("measures[\"{s}\"]"),
+            Param::Region(s) => format!("regions[\"{s}\"]"),
         }
     }
 
@@ -179,6 +182,9 @@ impl Param {
             Param::Proportions => shape.proportions = v,
             Param::Slider(s) => {
                 shape.measures.insert(s.to_owned(), v);
+            }
+            Param::Region(s) => {
+                shape.regions.insert(s.to_owned(), v);
             }
         }
     }
@@ -204,6 +210,25 @@ impl Param {
                     matches!(m, Stature | Neck | Bust | Underbust | Hip | NavelWaist)
                 }
                 "upperarm-length" | "lowerarm-length" => matches!(m, ArmLength),
+                _ => false,
+            },
+            Param::Region(s) => match s {
+                "neck-scale-depth" | "neck-scale-horiz" | "neck-back-scale-depth" => {
+                    matches!(m, Neck)
+                }
+                "neck-scale-vert" => matches!(m, Neck | Stature),
+                "torso-scale-depth" | "torso-scale-horiz" => matches!(
+                    m,
+                    ShoulderWidth | Neck | Bust | Underbust | Waist | NavelWaist
+                ),
+                "torso-scale-vert" => matches!(m, Stature | NavelWaist),
+                "hip-scale-depth" | "hip-scale-horiz" => {
+                    matches!(m, Underbust | Waist | NavelWaist | Hip | Thigh)
+                }
+                "upperleg-scale-depth" | "upperleg-scale-horiz" => matches!(m, Hip | Thigh),
+                "lowerleg-scale-depth" | "lowerleg-scale-horiz" => matches!(m, Calf),
+                "lowerleg-scale-vert" => matches!(m, Stature | InsideLeg),
+                "upperarm-scale-horiz" | "lowerarm-scale-horiz" => matches!(m, ArmLength),
                 _ => false,
             },
         }
@@ -232,6 +257,26 @@ const SLIDERS: [&str; 17] = [
     "waisttohip-dist",
     "upperarm-length",
     "lowerarm-length",
+];
+
+/// The region scale sliders the fit may use (MakeHuman's `*-scale-*` targets of the neck,
+/// torso, hip and limbs; the ones with an effect on a measurement).
+const REGIONS: [&str; 15] = [
+    "neck-scale-depth",
+    "neck-scale-horiz",
+    "neck-back-scale-depth",
+    "neck-scale-vert",
+    "torso-scale-depth",
+    "torso-scale-horiz",
+    "torso-scale-vert",
+    "hip-scale-depth",
+    "hip-scale-horiz",
+    "upperleg-scale-depth",
+    "upperleg-scale-horiz",
+    "lowerleg-scale-depth",
+    "lowerleg-scale-horiz",
+    "upperarm-scale-horiz",
+    "lowerarm-scale-horiz",
 ];
 
 /// MakeHuman's age slider for an age in years (0.5 = 25, 1 = 90; linear in between, as
@@ -275,23 +320,34 @@ impl FitRequest {
 }
 
 /// The morph restricted to the vertices a probe reads: positions = base + Σ w_t · D_t, with
-/// each target's deltas on those vertices gathered on first use.
+/// each target's deltas on those vertices gathered on first use. Updates are incremental:
+/// only the targets whose weight changed since the last call are applied (a finite-difference
+/// column changes one or a few), with a full recomputation every [`FULL_MORPH_EVERY`] calls
+/// so rounding cannot drift.
 struct ProbeMorph<'a> {
     model: &'a BodyModel,
     vertices: Vec<u32>,
-    /// Per target index: (position in `vertices`, delta in metres).
+    /// Per target index: (vertex index, delta in metres).
     deltas: HashMap<usize, Vec<(u32, Vec3)>>,
     /// Whole-mesh positions; only `vertices` are kept up to date.
     scratch: Vec<Vec3>,
+    /// The weights `scratch` holds, sorted by target.
+    applied: Vec<(usize, f32)>,
+    since_full: usize,
 }
 
+/// Calls of [`ProbeMorph::apply`] between full recomputations.
+const FULL_MORPH_EVERY: usize = 64;
+
 impl<'a> ProbeMorph<'a> {
-    fn new(model: &'a BodyModel, vertices: &[u32], reference: &[Vec3]) -> Self {
+    fn new(model: &'a BodyModel, vertices: &[u32]) -> Self {
         Self {
             model,
             vertices: vertices.to_vec(),
             deltas: HashMap::new(),
-            scratch: reference.to_vec(),
+            scratch: model.positions.clone(),
+            applied: Vec::new(),
+            since_full: 0,
         }
     }
 
@@ -311,7 +367,7 @@ impl<'a> ProbeMorph<'a> {
                     std::cmp::Ordering::Equal => {
                         let d = t.deltas[i];
                         out.push((
-                            j as u32,
+                            vertices[j],
                             Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * t.scale_m,
                         ));
                         i += 1;
@@ -325,19 +381,60 @@ impl<'a> ProbeMorph<'a> {
 
     /// Morphs the probe's vertices to `weights`.
     fn apply(&mut self, weights: &[(usize, f32)]) -> &[Vec3] {
-        let mut local: Vec<Vec3> = self
-            .vertices
-            .iter()
-            .map(|&v| self.model.positions[v as usize])
-            .collect();
-        for &(t, w) in weights {
-            for &(j, d) in self.target(t) {
-                local[j as usize] += d * w;
+        let mut new: Vec<(usize, f32)> = weights.to_vec();
+        new.sort_by_key(|w| w.0);
+        new.dedup_by(|b, a| {
+            // Same target twice: sum into the kept one.
+            if a.0 == b.0 {
+                a.1 += b.1;
+                true
+            } else {
+                false
+            }
+        });
+        if self.since_full >= FULL_MORPH_EVERY {
+            for &v in &self.vertices {
+                self.scratch[v as usize] = self.model.positions[v as usize];
+            }
+            self.applied.clear();
+            self.since_full = 0;
+        }
+        // Weight changes: merge the two sorted lists.
+        let mut changes: Vec<(usize, f32)> = Vec::new();
+        let (mut i, mut j) = (0, 0);
+        while i < new.len() || j < self.applied.len() {
+            let (a, b) = (new.get(i), self.applied.get(j));
+            match (a, b) {
+                (Some(&(ta, wa)), Some(&(tb, wb))) if ta == tb => {
+                    if wa != wb {
+                        changes.push((ta, wa - wb));
+                    }
+                    i += 1;
+                    j += 1;
+                }
+                (Some(&(ta, wa)), Some(&(tb, _))) if ta < tb => {
+                    changes.push((ta, wa));
+                    i += 1;
+                }
+                (Some(&(ta, wa)), None) => {
+                    changes.push((ta, wa));
+                    i += 1;
+                }
+                (_, Some(&(tb, wb))) => {
+                    changes.push((tb, -wb));
+                    j += 1;
+                }
+                (None, None) => break,
             }
         }
-        for (&v, p) in self.vertices.iter().zip(local) {
-            self.scratch[v as usize] = p;
+        for (t, dw) in changes {
+            let deltas = self.target(t).to_vec();
+            for (v, d) in deltas {
+                self.scratch[v as usize] += d * dw;
+            }
         }
+        self.applied = new;
+        self.since_full += 1;
         &self.scratch
     }
 }
@@ -400,6 +497,7 @@ impl Fitter<'_> {
             p.set(&mut s, v);
         }
         s.measures.retain(|_, v| *v != 0.0);
+        s.regions.retain(|_, v| *v != 0.0);
         s
     }
 
@@ -592,6 +690,12 @@ pub fn fit(
             .map(|&s| Param::Slider(s))
             .filter(|p| request.targets.keys().any(|&m| p.moves(m))),
     );
+    params.extend(
+        REGIONS
+            .iter()
+            .map(|&s| Param::Region(s))
+            .filter(|p| request.targets.keys().any(|&m| p.moves(m))),
+    );
     let prior: Vec<f32> = params.iter().map(|p| p.rest()).collect();
     let mut fitter = Fitter {
         model,
@@ -611,7 +715,6 @@ pub fn fit(
         x: Vec<f32>,
         measured: Measurements,
         probe: MeasureProbe,
-        positions: Vec<Vec3>,
     }
     let mut x = prior;
     let mut best: Option<Best> = None;
@@ -635,7 +738,6 @@ pub fn fit(
                 x: x.clone(),
                 measured,
                 probe,
-                positions: body.positions,
             });
         } else {
             trust *= 0.5;
@@ -646,7 +748,7 @@ pub fn fit(
         let Some(b) = best.as_ref() else {
             break;
         };
-        let mut morph = ProbeMorph::new(model, b.probe.vertices(), &b.positions);
+        let mut morph = ProbeMorph::new(model, b.probe.vertices());
         let (xn, steps) = fitter.inner(b.x.clone(), &b.probe, &mut morph, options, trust)?;
         iterations += steps;
         x = xn;

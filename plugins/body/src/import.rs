@@ -837,8 +837,25 @@ fn build_skin(
 // ---------------------------------------------------------------------------------------------
 // Morph targets
 
-/// Collects `(name, path)` of the targets to import: everything under `macrodetails/` and
-/// every `measure-*` target anywhere.
+/// Whether a target is one of the body-region scale targets that help fitting
+/// (`neck/neck-scale-horiz-decr`, `legs/l-upperleg-scale-depth-incr`, ...): the `*-scale-*`
+/// targets of the neck, torso, hip, legs and arms (not the face's or the feet's).
+fn is_region_scale(root: &Path, dir: &Path, stem: &str) -> bool {
+    let top = dir
+        .strip_prefix(root)
+        .ok()
+        .and_then(|p| p.components().next())
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .unwrap_or_default();
+    matches!(top.as_str(), "neck" | "torso" | "hip" | "legs" | "arms")
+        && stem.contains("-scale-")
+        && (stem.ends_with("-decr") || stem.ends_with("-incr"))
+        && !stem.contains("foot")
+        && !stem.contains("hand")
+}
+
+/// Collects `(name, path)` of the targets to import: everything under `macrodetails/`, every
+/// `measure-*` target anywhere and the region scale targets ([`is_region_scale`]).
 fn collect_targets(
     root: &Path,
     dir: &Path,
@@ -865,7 +882,7 @@ fn collect_targets(
             let macro_dir = in_macrodetails || (dir == root && file_name == "macrodetails");
             collect_targets(root, &path, macro_dir, out)?;
         } else if let Some(stem) = file_name.strip_suffix(".target.gz")
-            && (in_macrodetails || stem.starts_with("measure-"))
+            && (in_macrodetails || stem.starts_with("measure-") || is_region_scale(root, dir, stem))
         {
             let rel = path.strip_prefix(root).unwrap_or(&path);
             let mut name: Vec<String> = rel

@@ -36,6 +36,13 @@
 //! A measure slider `name` (e.g. `waist-circ`) with value v in -1..=1 drives the pair of
 //! targets `*/measure-{name}-decr` with weight -min(v, 0) and `*/measure-{name}-incr` with
 //! weight max(v, 0).
+//!
+//! # Region scale rules
+//!
+//! A region scale slider (`neck-scale-horiz`, `torso-scale-depth`, `hip-scale-horiz`,
+//! `upperleg-scale-horiz`...) drives the `*-scale-*-decr|incr` targets of that region the same
+//! way; a limb's slider drives the left (`l-`) and right (`r-`) targets alike, as MakeHuman
+//! does with symmetry on.
 
 use std::collections::{BTreeMap, HashMap};
 
@@ -69,6 +76,9 @@ pub struct Shape {
     /// Measure sliders by name (`waist-circ`, `bust-circ`, `upperarm-length`...), each -1..=1;
     /// see [`Shape::measure_names`].
     pub measures: BTreeMap<String, f32>,
+    /// Region scale sliders by name (`neck-scale-horiz`, `torso-scale-depth`,
+    /// `upperleg-scale-horiz` for both legs...), each -1..=1; see [`Shape::region_names`].
+    pub regions: BTreeMap<String, f32>,
 }
 
 impl Default for Shape {
@@ -85,6 +95,7 @@ impl Default for Shape {
             asian: 1.0 / 3.0,
             caucasian: 1.0 / 3.0,
             measures: BTreeMap::new(),
+            regions: BTreeMap::new(),
         }
     }
 }
@@ -113,6 +124,8 @@ pub enum ShapeError {
     NoEthnicity,
     #[error("unknown measure modifier `{name}` in shape field `measures`; known: {known}")]
     UnknownModifier { name: String, known: String },
+    #[error("unknown region scale modifier `{name}` in shape field `regions`; known: {known}")]
+    UnknownRegion { name: String, known: String },
     #[error("the body model has no morph target `{0}`, which this shape needs")]
     MissingTarget(String),
 }
@@ -180,6 +193,24 @@ fn check(field: &str, value: f32, min: f32, max: f32) -> Result<(), ShapeError> 
     Ok(())
 }
 
+/// The target name's region scale slider and direction: `legs/l-upperleg-scale-horiz-incr` ->
+/// (`upperleg-scale-horiz`, true); left and right targets share one (symmetric) slider.
+fn region_target(name: &str) -> Option<(&str, bool)> {
+    let file = name.rsplit('/').next()?;
+    if !file.contains("-scale-") {
+        return None;
+    }
+    let file = file
+        .strip_prefix("l-")
+        .or_else(|| file.strip_prefix("r-"))
+        .unwrap_or(file);
+    if let Some(s) = file.strip_suffix("-incr") {
+        Some((s, true))
+    } else {
+        file.strip_suffix("-decr").map(|s| (s, false))
+    }
+}
+
 /// The target name's measure slider and direction: `torso/measure-waist-circ-incr` ->
 /// (`waist-circ`, true).
 fn measure_target(name: &str) -> Option<(&str, bool)> {
@@ -216,6 +247,9 @@ impl Shape {
         for (name, &v) in &self.measures {
             check(&format!("measures[\"{name}\"]"), v, -1.0, 1.0)?;
         }
+        for (name, &v) in &self.regions {
+            check(&format!("regions[\"{name}\"]"), v, -1.0, 1.0)?;
+        }
         Ok(())
     }
 
@@ -235,6 +269,18 @@ impl Shape {
             .into_iter()
             .filter(|n| decr.contains(n))
             .map(str::to_owned)
+            .collect();
+        names.sort();
+        names.dedup();
+        names
+    }
+
+    /// The names of the region scale sliders a model offers (sorted).
+    pub fn region_names(model: &BodyModel) -> Vec<String> {
+        let mut names: Vec<String> = model
+            .targets
+            .iter()
+            .filter_map(|t| region_target(&t.name).map(|(n, _)| n.to_owned()))
             .collect();
         names.sort();
         names.dedup();
@@ -337,6 +383,26 @@ impl Shape {
                         known: Self::measure_names(model).join(", "),
                     });
                 }
+            }
+        }
+        for (name, &v) in &self.regions {
+            let mut found = false;
+            for (i, t) in model.targets.iter().enumerate() {
+                if let Some((n, incr)) = region_target(&t.name)
+                    && n == name
+                {
+                    found = true;
+                    let w = if incr { v.max(0.0) } else { -v.min(0.0) };
+                    if w != 0.0 {
+                        out.push((i, w));
+                    }
+                }
+            }
+            if !found {
+                return Err(ShapeError::UnknownRegion {
+                    name: name.clone(),
+                    known: Self::region_names(model).join(", "),
+                });
             }
         }
         Ok(out)

@@ -58,8 +58,17 @@ fn import_counts() {
             .any(|h| h.name == "helper-tights" && !h.triangles.is_empty())
     );
     assert_eq!(imp.report.unweighted_vertices, 0);
-    // 348 macro targets (incl. height and proportions) and 40 measure targets.
-    assert_eq!(m.targets.len(), 348 + 40);
+    // 348 macro targets (incl. height and proportions), 40 measure targets and 68 region
+    // scale targets (neck, torso, hip, legs, arms: `*-scale-{depth,horiz,vert}-{decr,incr}`).
+    assert_eq!(m.targets.len(), 348 + 40 + 68);
+    let regions = fitroom_body::Shape::region_names(&m);
+    for name in [
+        "neck-scale-horiz",
+        "torso-scale-depth",
+        "upperleg-scale-horiz",
+    ] {
+        assert!(regions.iter().any(|r| r == name), "{name} in {regions:?}");
+    }
     let empty: Vec<&str> = m
         .targets
         .iter()

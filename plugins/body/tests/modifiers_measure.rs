@@ -633,6 +633,7 @@ fn shaping_time() {
             ("bust-circ".to_owned(), -0.2),
             ("upperarm-length".to_owned(), 0.4),
         ]),
+        regions: BTreeMap::new(),
     };
     // Warm up, then average.
     let body = m.shaped(&shape).unwrap();
