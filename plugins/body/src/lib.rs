@@ -79,6 +79,7 @@
 pub mod ansur;
 pub mod asset;
 mod codec;
+pub mod colliders;
 pub mod fit;
 pub mod forearm;
 pub mod import;
