@@ -61,7 +61,7 @@ fn import_counts() {
     // 348 macro targets (incl. height and proportions), 40 measure targets and 68 region
     // scale targets (neck, torso, hip, legs, arms: `*-scale-{depth,horiz,vert}-{decr,incr}`).
     assert_eq!(m.targets.len(), 348 + 40 + 68);
-    let regions = fitroom_body::Shape::region_names(&m);
+    let regions = fitroom_body::Shape::region_names(m);
     for name in [
         "neck-scale-horiz",
         "torso-scale-depth",
