@@ -319,10 +319,10 @@ pub fn write_glb(model: &BodyModel, body: &ShapedBody, out: &Path) -> Result<()>
         ]
     });
     let mut json = serde_json::to_vec(&json)?;
-    while json.len() % 4 != 0 {
+    while !json.len().is_multiple_of(4) {
         json.push(b' ');
     }
-    while bin.len() % 4 != 0 {
+    while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
     let total = 12 + 8 + json.len() + 8 + bin.len();

@@ -5,6 +5,7 @@
 pub mod assets;
 pub mod body_cli;
 pub mod body_panel;
+pub mod cloth_cli;
 pub mod headless;
 pub mod kiosk;
 pub mod motion_cli;
@@ -25,6 +26,7 @@ use fitroom_body::{
     BodyModel, Shape,
     plugin::{AvatarBody, AvatarShape, BodyPlugin, BodySystems, SensorPlacement},
 };
+use fitroom_garment::plugin::{ClothSettings, GarmentPlugin, GarmentRequest};
 use fitroom_motion::{
     eval::AvatarPipeline,
     filter::FilterKind,
@@ -65,6 +67,11 @@ pub struct AppOptions {
     pub shape_path: PathBuf,
     /// Open the body panel at start.
     pub body_panel: bool,
+    /// The garment the avatar wears (a pattern `.ron`), and its size.
+    pub garment: Option<PathBuf>,
+    pub garment_size: Option<String>,
+    /// Colour the garment by strain.
+    pub fit_map: bool,
 }
 
 impl AppOptions {
@@ -79,6 +86,9 @@ impl AppOptions {
             shape: None,
             shape_path: PathBuf::from("shape.ron"),
             body_panel: false,
+            garment: None,
+            garment_size: None,
+            fit_map: false,
         })
     }
 }
@@ -195,7 +205,16 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             },
             kiosk::KioskPlugin,
             timing::TimingPlugin,
+            GarmentPlugin,
         ))
+        .insert_resource(GarmentRequest {
+            path: options.garment.clone(),
+            size: options.garment_size.clone(),
+        })
+        .insert_resource(ClothSettings {
+            fit_map: options.fit_map,
+            ..Default::default()
+        })
         .add_systems(Update, follow_body_shape.after(BodySystems::Reshape));
 
     if render {

@@ -43,6 +43,15 @@ struct Inputs {
     /// Open the body panel at start.
     #[arg(long)]
     body_panel: bool,
+    /// A garment for the avatar (pattern .ron, e.g. assets/garments/sundress.ron).
+    #[arg(long)]
+    garment: Option<PathBuf>,
+    /// The garment's size (a label of its size chart; default: its middle size).
+    #[arg(long)]
+    size: Option<String>,
+    /// Colour the garment by strain (the fit map).
+    #[arg(long)]
+    fit_map: bool,
 }
 
 #[derive(Subcommand)]
@@ -91,6 +100,11 @@ enum Command {
         #[command(subcommand)]
         command: ImportCommand,
     },
+    /// Garments on the avatar without a window: simulation, fit map, speed.
+    Cloth {
+        #[command(subcommand)]
+        command: ClothCommand,
+    },
     /// Body tools.
     Body {
         #[command(subcommand)]
@@ -100,6 +114,60 @@ enum Command {
     Motion {
         #[command(subcommand)]
         command: MotionCommand,
+    },
+}
+
+#[derive(Subcommand)]
+enum ClothCommand {
+    /// The garment on the avatar walking a clip: per-step cost, penetration, strain, resets.
+    Sim {
+        /// A garment file (pattern .ron, or .obj/.glb), e.g. assets/garments/sundress.ron.
+        #[arg(long)]
+        garment: PathBuf,
+        /// A size label of the garment (default: its middle size).
+        #[arg(long)]
+        size: Option<String>,
+        /// BVH clip (default: the embedded walk).
+        #[arg(long)]
+        motion: Option<PathBuf>,
+        /// Video frames (1/30 s of the clip each).
+        #[arg(long, default_value_t = 120)]
+        frames: usize,
+        #[arg(long)]
+        shape: Option<PathBuf>,
+        #[arg(long)]
+        threads: Option<usize>,
+        #[arg(long)]
+        body: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// The garment settled on the body at rest: strain, gap and the ease at bust, waist, hip.
+    Fit {
+        #[arg(long)]
+        garment: PathBuf,
+        #[arg(long)]
+        size: Option<String>,
+        #[arg(long)]
+        shape: Option<PathBuf>,
+        /// Simulated settling time, s.
+        #[arg(long, default_value_t = 1.5)]
+        settle: f32,
+        #[arg(long)]
+        body: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
+    },
+    /// The cloth step's cost: the dress on the walking avatar, and 1k-64k particles.
+    Bench {
+        #[arg(long)]
+        garment: Option<PathBuf>,
+        #[arg(long, default_value_t = 60)]
+        frames: usize,
+        #[arg(long)]
+        body: Option<PathBuf>,
+        #[arg(long)]
+        json: bool,
     },
 }
 
@@ -281,6 +349,9 @@ fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
             .clone()
             .unwrap_or_else(|| PathBuf::from("shape.ron")),
         body_panel: inputs.body_panel,
+        garment: inputs.garment.clone(),
+        garment_size: inputs.size.clone(),
+        fit_map: inputs.fit_map,
     })
 }
 
@@ -307,6 +378,9 @@ fn run(cli: Cli) -> Result<()> {
             seed: 1,
             shape: None,
             body_panel: false,
+            garment: None,
+            size: None,
+            fit_map: false,
         },
     }) {
         Command::Kiosk {
@@ -496,6 +570,7 @@ fn run(cli: Cli) -> Result<()> {
             }
             print!("{md}");
         }
+        Command::Cloth { command } => cloth_command(command)?,
         Command::Motion {
             command:
                 MotionCommand::Eval {
@@ -715,4 +790,131 @@ fn screenshot_then_quit(
             exit.write(AppExit::Success);
         }
     }
+}
+
+fn cloth_command(command: ClothCommand) -> Result<()> {
+    let assets = fitroom::assets::assets_dir()?;
+    match command {
+        ClothCommand::Sim {
+            garment,
+            size,
+            motion,
+            frames,
+            shape,
+            threads,
+            body,
+            json,
+        } => {
+            let model = load_body(body)?;
+            let shape = fitroom::body_cli::load_shape(shape.as_deref())?;
+            let motion = motion.unwrap_or_else(|| assets.join(fitroom::assets::DEFAULT_MOTION));
+            let (r, _, _) = fitroom::cloth_cli::sim(
+                &model,
+                &shape,
+                &garment,
+                size.as_deref(),
+                &motion,
+                frames,
+                threads,
+            )?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&r)?);
+            } else {
+                println!(
+                    "{} size {} ({}): {} particles, {} attached, {} colliders; {} steps of 1/120 s, {} substeps\n\
+                     step {:.2} ms mean, {:.2} p95, {:.2} max; per video frame {:.2} ms mean\n\
+                     max penetration {:.2} mm, max strain {:.1}%, resets {}, all finite: {}",
+                    r.garment,
+                    r.size,
+                    r.fabric,
+                    r.particles,
+                    r.attached,
+                    r.colliders,
+                    r.steps,
+                    r.substeps,
+                    r.step_ms.mean,
+                    r.step_ms.p95,
+                    r.step_ms.max,
+                    r.frame_ms.mean,
+                    r.max_penetration_mm,
+                    r.max_strain_pct,
+                    r.resets,
+                    r.all_finite
+                );
+            }
+        }
+        ClothCommand::Fit {
+            garment,
+            size,
+            shape,
+            settle,
+            body,
+            json,
+        } => {
+            let model = load_body(body)?;
+            let shape = fitroom::body_cli::load_shape(shape.as_deref())?;
+            let (r, _) =
+                fitroom::cloth_cli::fit_map(&model, &shape, &garment, size.as_deref(), settle)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&r)?);
+            } else {
+                println!(
+                    "{} size {} ({}), settled {} s: strain max {:.1}% mean {:.2}%, mean gap {:.1} mm, max penetration {:.2} mm",
+                    r.garment,
+                    r.size,
+                    r.fabric,
+                    r.settle_s,
+                    r.max_strain_pct,
+                    r.mean_strain_pct,
+                    r.mean_gap_mm,
+                    r.max_penetration_mm
+                );
+                for e in &r.ease {
+                    match (e.garment_girth_cm, e.ease_cm) {
+                        (Some(g), Some(ease)) => println!(
+                            "  {:<6} body {:.1} cm, garment {:.1} cm: ease {:+.1} cm",
+                            e.landmark, e.body_girth_cm, g, ease
+                        ),
+                        _ => println!(
+                            "  {:<6} body {:.1} cm: the garment does not go round the body there",
+                            e.landmark, e.body_girth_cm
+                        ),
+                    }
+                }
+            }
+        }
+        ClothCommand::Bench {
+            garment,
+            frames,
+            body,
+            json,
+        } => {
+            let model = load_body(body)?;
+            let dress = garment.unwrap_or_else(|| assets.join("garments/sundress.ron"));
+            let motion = assets.join(fitroom::assets::DEFAULT_MOTION);
+            let r = fitroom::cloth_cli::bench(&model, &dress, &motion, frames)?;
+            if json {
+                println!("{}", serde_json::to_string_pretty(&r)?);
+            } else {
+                println!(
+                    "{} ({} particles, {} colliders, {} substeps, {} threads): {:.2} ms per 120 Hz step (p95 {:.2}); goal {} ms",
+                    r.dress.garment,
+                    r.dress.particles,
+                    r.dress.colliders,
+                    r.dress.substeps,
+                    r.threads,
+                    r.dress.step_ms.mean,
+                    r.dress.step_ms.p95,
+                    r.goal_ms
+                );
+                for (n, s) in &r.scaling {
+                    println!(
+                        "  {n:>6} particles: {:.2} ms per step (p95 {:.2})",
+                        s.mean, s.p95
+                    );
+                }
+            }
+        }
+    }
+    Ok(())
 }

@@ -1,0 +1,390 @@
+//! Bevy adapter: the garment the avatar wears, simulated on worker threads at a fixed rate
+//! (120 Hz by default) within a time budget per frame, drawn with an optional fit map.
+//!
+//! * [`GarmentRequest`] names the garment file and size; changing it, reshaping the avatar, or
+//!   saving the garment file (hot reload: the file's modification time is polled twice a
+//!   second) rebuilds the garment. A file that does not load keeps the garment the avatar had
+//!   and puts the error in [`GarmentStatus`].
+//! * Each frame, after transform propagation, the avatar's skinning transforms (joint global
+//!   transforms times the inverse bind poses) drive the cloth: as many 120 Hz steps as the
+//!   frame's time asks for, interpolating the body between the last frame and this one, but
+//!   no more than fit in [`ClothSettings::budget_ms`] (the rest is dropped and counted, so a
+//!   slow renderer slows the cloth down instead of stalling the app).
+//! * A blow-up resets the garment to its skinned pose and is logged; in debug builds a check
+//!   asserts that every position stays finite.
+//! * With [`ClothSettings::fit_map`] the garment is coloured by strain (blue: slack, white:
+//!   rest length, red: stretched 10% or more), like a CLO3D strain map.
+
+use std::path::PathBuf;
+use std::time::{Instant, SystemTime};
+
+use bevy::{
+    asset::RenderAssetUsages,
+    mesh::{Indices, PrimitiveTopology},
+    prelude::*,
+    transform::TransformSystems,
+};
+use fitroom_body::{
+    ShapedBody,
+    plugin::{AvatarBody, AvatarJoint},
+};
+use fitroom_cloth::SolverSettings;
+use glam::Affine3A;
+
+use crate::sim::{GarmentSim, SimGarment};
+use crate::{BodySurface, BuildOptions, Pattern};
+
+/// Cloth settings (live-editable).
+#[derive(Resource, Debug, Clone, Reflect)]
+#[reflect(Resource)]
+pub struct ClothSettings {
+    /// Cloth steps per second.
+    pub rate_hz: f32,
+    /// Substeps per step.
+    pub substeps: u32,
+    /// Most CPU time per frame for the cloth, ms.
+    pub budget_ms: f32,
+    /// Colour the garment by strain.
+    pub fit_map: bool,
+}
+
+impl Default for ClothSettings {
+    fn default() -> Self {
+        Self {
+            rate_hz: 120.0,
+            substeps: 10,
+            budget_ms: 8.0,
+            fit_map: false,
+        }
+    }
+}
+
+/// What the avatar wears: a garment file and a size (`None`: nothing / the middle size).
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct GarmentRequest {
+    pub path: Option<PathBuf>,
+    pub size: Option<String>,
+}
+
+/// How the garment is doing (for the overlay and tests).
+#[derive(Resource, Debug, Clone, Default)]
+pub struct GarmentStatus {
+    /// `name size` of the garment worn.
+    pub worn: Option<String>,
+    pub particles: usize,
+    /// The last load error (the garment worn stays).
+    pub error: Option<String>,
+    pub steps: u64,
+    /// Steps the budget dropped.
+    pub dropped_steps: u64,
+    pub resets: u32,
+    /// CPU time of the cloth in the last frame, ms.
+    pub frame_ms: f32,
+    /// Largest strain now, %.
+    pub max_strain_pct: f32,
+}
+
+/// The simulated garment entity.
+#[derive(Component)]
+pub struct WornGarment {
+    sim: Box<GarmentSim>,
+    mesh: Handle<Mesh>,
+    accumulated_s: f32,
+    previous: Option<Vec<Affine3A>>,
+}
+
+/// Where the garment file was when loaded, to notice edits.
+#[derive(Resource, Default)]
+struct Watched {
+    path: Option<PathBuf>,
+    modified: Option<SystemTime>,
+    polled_s: f32,
+    reload: bool,
+}
+
+/// Systems of the garment plugin.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub enum GarmentSystems {
+    Load,
+    Step,
+}
+
+pub struct GarmentPlugin;
+
+impl Plugin for GarmentPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<ClothSettings>()
+            .register_type::<ClothSettings>()
+            .init_resource::<GarmentRequest>()
+            .init_resource::<GarmentStatus>()
+            .init_resource::<Watched>()
+            .add_systems(
+                Update,
+                (watch_file, load_garment)
+                    .chain()
+                    .in_set(GarmentSystems::Load),
+            )
+            .add_systems(
+                PostUpdate,
+                step_garment
+                    .in_set(GarmentSystems::Step)
+                    .after(TransformSystems::Propagate),
+            );
+    }
+}
+
+fn watch_file(time: Res<Time>, request: Res<GarmentRequest>, mut watched: ResMut<Watched>) {
+    watched.polled_s += time.delta_secs();
+    if watched.polled_s < 0.5 {
+        return;
+    }
+    watched.polled_s = 0.0;
+    let Some(path) = &request.path else {
+        return;
+    };
+    let modified = std::fs::metadata(path).and_then(|m| m.modified()).ok();
+    if watched.path.as_ref() == Some(path) && modified.is_some() && modified != watched.modified {
+        watched.reload = true;
+    }
+}
+
+/// The avatar's skinning transforms: rest model space to world.
+fn skinning(body: &AvatarBody, joints: &Query<(&AvatarJoint, &GlobalTransform)>) -> Vec<Affine3A> {
+    let mut out = vec![Affine3A::IDENTITY; body.model.bones.len()];
+    for (joint, global) in joints {
+        let i = joint.0;
+        if let (Some(slot), Some(&r), Some(&h)) = (
+            out.get_mut(i),
+            body.rest.rotations.get(i),
+            body.rest.heads.get(i),
+        ) {
+            *slot = global.affine() * Affine3A::from_rotation_translation(r, h).inverse();
+        }
+    }
+    out
+}
+
+fn garment_mesh(positions: &[Vec3], triangles: &[[u32; 3]], colours: Option<&[f32]>) -> Mesh {
+    let normals = fitroom_body::rig::compute_normals(positions, triangles);
+    let mut mesh = Mesh::new(
+        PrimitiveTopology::TriangleList,
+        RenderAssetUsages::default(),
+    )
+    .with_inserted_attribute(
+        Mesh::ATTRIBUTE_POSITION,
+        positions.iter().map(|p| p.to_array()).collect::<Vec<_>>(),
+    )
+    .with_inserted_attribute(
+        Mesh::ATTRIBUTE_NORMAL,
+        normals.iter().map(|n| n.to_array()).collect::<Vec<_>>(),
+    )
+    .with_inserted_indices(Indices::U32(triangles.iter().flatten().copied().collect()));
+    let colours: Vec<[f32; 4]> = match colours {
+        Some(strain) => strain.iter().map(|&s| strain_colour(s)).collect(),
+        None => vec![[1.0; 4]; positions.len()],
+    };
+    mesh.insert_attribute(Mesh::ATTRIBUTE_COLOR, colours);
+    mesh
+}
+
+/// The fit map's colour of a strain (%): blue (-5% and less) - white (0) - red (+10% and more).
+pub fn strain_colour(strain_pct: f32) -> [f32; 4] {
+    if strain_pct >= 0.0 {
+        let t = (strain_pct / 10.0).clamp(0.0, 1.0);
+        [1.0, 1.0 - t, 1.0 - t, 1.0]
+    } else {
+        let t = (-strain_pct / 5.0).clamp(0.0, 1.0);
+        [1.0 - t, 1.0 - 0.6 * t, 1.0, 1.0]
+    }
+}
+
+#[allow(clippy::too_many_arguments)]
+fn load_garment(
+    mut commands: Commands,
+    request: Res<GarmentRequest>,
+    body: Option<Res<AvatarBody>>,
+    settings: Res<ClothSettings>,
+    mut status: ResMut<GarmentStatus>,
+    mut watched: ResMut<Watched>,
+    worn: Query<Entity, With<WornGarment>>,
+    joints: Query<(&AvatarJoint, &GlobalTransform)>,
+    mut meshes: Option<ResMut<Assets<Mesh>>>,
+    mut materials: Option<ResMut<Assets<StandardMaterial>>>,
+) {
+    let Some(body) = body else {
+        return;
+    };
+    if !(request.is_changed() || body.is_changed() || watched.reload) {
+        return;
+    }
+    watched.reload = false;
+    let Some(path) = request.path.clone() else {
+        for e in &worn {
+            commands.entity(e).despawn();
+        }
+        status.worn = None;
+        return;
+    };
+    watched.path = Some(path.clone());
+    watched.modified = std::fs::metadata(&path).and_then(|m| m.modified()).ok();
+    let built = (|| -> Result<(crate::GarmentMesh, GarmentSim), String> {
+        let shaped = ShapedBody {
+            weights: Vec::new(),
+            positions: body.positions.clone(),
+            normals: body.normals.clone(),
+            rest_pose: body.rest.clone(),
+        };
+        let surface = BodySurface::new(&body.model, &shaped).map_err(|e| e.to_string())?;
+        let pattern = Pattern::load(&path).map_err(|e| e.to_string())?;
+        let labels = pattern.size_labels();
+        let size = match &request.size {
+            Some(s) if labels.contains(&s.as_str()) => s.clone(),
+            Some(s) => {
+                return Err(format!(
+                    "{}: no size `{s}`; its sizes: {}",
+                    path.display(),
+                    labels.join(", ")
+                ));
+            }
+            None => labels
+                .get(labels.len() / 2)
+                .map(|s| s.to_string())
+                .ok_or_else(|| format!("{}: no sizes", path.display()))?,
+        };
+        let mesh = pattern
+            .build(&surface, &size, &BuildOptions::default())
+            .and_then(|m| m.welded(&surface))
+            .map_err(|e| e.to_string())?;
+        let solver = SolverSettings {
+            substeps: settings.substeps.max(1),
+            ..SolverSettings::default()
+        };
+        let garment = SimGarment {
+            positions: mesh.positions.clone(),
+            triangles: mesh.triangles.clone(),
+            attached: mesh.attached.clone(),
+            fabric: mesh.fabric,
+        };
+        let sim = GarmentSim::new(&body.model, &body.positions, &body.rest, &garment, solver)
+            .map_err(|e| e.to_string())?;
+        Ok((mesh, sim))
+    })();
+    let (garment, mut sim) = match built {
+        Ok(b) => b,
+        Err(e) => {
+            warn!("garment not (re)loaded, the avatar keeps what it wears: {e}");
+            status.error = Some(e);
+            return;
+        }
+    };
+    let skin = skinning(&body, &joints);
+    sim.set_measuring(false);
+    let floor = sim.set_floor(Some(0.0)).and_then(|_| sim.reset(&skin));
+    if let Err(e) = floor {
+        status.error = Some(e.to_string());
+        return;
+    }
+    for e in &worn {
+        commands.entity(e).despawn();
+    }
+    status.worn = Some(format!("{} {}", garment.name, garment.size));
+    status.particles = garment.positions.len();
+    status.error = None;
+    let (Some(meshes), Some(materials)) = (meshes.as_mut(), materials.as_mut()) else {
+        // Headless without a renderer: simulate without drawing.
+        commands.spawn(WornGarment {
+            sim: Box::new(sim),
+            mesh: Handle::default(),
+            accumulated_s: 0.0,
+            previous: None,
+        });
+        return;
+    };
+    let mesh = meshes.add(garment_mesh(&sim.positions(), sim.triangles(), None));
+    commands.spawn((
+        WornGarment {
+            sim: Box::new(sim),
+            mesh: mesh.clone(),
+            accumulated_s: 0.0,
+            previous: None,
+        },
+        Mesh3d(mesh),
+        MeshMaterial3d(materials.add(StandardMaterial {
+            base_color: Color::srgb(0.35, 0.45, 0.75),
+            perceptual_roughness: 0.85,
+            cull_mode: None,
+            double_sided: true,
+            ..default()
+        })),
+        Transform::IDENTITY,
+        Visibility::default(),
+    ));
+}
+
+fn lerp_affine(a: &Affine3A, b: &Affine3A, t: f32) -> Affine3A {
+    let (sa, ra, ta) = a.to_scale_rotation_translation();
+    let (sb, rb, tb) = b.to_scale_rotation_translation();
+    Affine3A::from_scale_rotation_translation(sa.lerp(sb, t), ra.slerp(rb, t), ta.lerp(tb, t))
+}
+
+fn step_garment(
+    time: Res<Time>,
+    settings: Res<ClothSettings>,
+    body: Option<Res<AvatarBody>>,
+    joints: Query<(&AvatarJoint, &GlobalTransform)>,
+    mut worn: Query<&mut WornGarment>,
+    mut status: ResMut<GarmentStatus>,
+    mut meshes: Option<ResMut<Assets<Mesh>>>,
+) {
+    let Some(body) = body else {
+        return;
+    };
+    let skin = skinning(&body, &joints);
+    let dt = 1.0 / settings.rate_hz.max(1.0);
+    for mut g in &mut worn {
+        let start = Instant::now();
+        g.accumulated_s += time.delta_secs();
+        let due = (g.accumulated_s / dt).floor() as u64;
+        let previous = g.previous.clone().unwrap_or_else(|| skin.clone());
+        let mut done = 0u64;
+        for k in 0..due {
+            if start.elapsed().as_secs_f32() * 1e3 > settings.budget_ms {
+                break;
+            }
+            let t = (k + 1) as f32 / due as f32;
+            let pose: Vec<Affine3A> = previous
+                .iter()
+                .zip(&skin)
+                .map(|(a, b)| lerp_affine(a, b, t))
+                .collect();
+            match g.sim.step(&pose, dt) {
+                Ok(s) => {
+                    if s.reset {
+                        warn!("the garment blew up and was reset to its skinned pose");
+                    }
+                    status.max_strain_pct = s.max_strain_pct;
+                }
+                Err(e) => {
+                    status.error = Some(e.to_string());
+                    break;
+                }
+            }
+            done += 1;
+        }
+        status.steps += done;
+        status.dropped_steps += due - done;
+        g.accumulated_s = 0.0_f32.max(g.accumulated_s - due as f32 * dt);
+        g.previous = Some(skin.clone());
+        status.resets = g.sim.resets();
+        if cfg!(debug_assertions) && !g.sim.positions().iter().all(|p| p.is_finite()) {
+            error!("garment positions are not finite after the step");
+        }
+        if let Some(meshes) = meshes.as_mut()
+            && let Some(mut mesh) = meshes.get_mut(&g.mesh)
+        {
+            let strain = settings.fit_map.then(|| g.sim.strain_pct());
+            *mesh = garment_mesh(&g.sim.positions(), g.sim.triangles(), strain.as_deref());
+        }
+        status.frame_ms = start.elapsed().as_secs_f32() * 1e3;
+    }
+}

@@ -1,0 +1,351 @@
+//! A garment simulated on a posed body (Bevy-free): the cloth solver driven by the body's
+//! skinning transforms each step.
+//!
+//! * The garment's rest mesh is in the body's model space (where it was placed and sewn).
+//!   Every garment vertex gets the skin weights of its nearest body vertex, so it can be skinned
+//!   like the body (seed 000 §3.2.1: the static part of a garment is skinned); a reset puts the
+//!   garment in that skinned pose.
+//! * Attached vertices (waistband, shoulder straps, a skinned bodice) follow their skinned
+//!   position each step; the solver moves them there linearly over the substeps.
+//! * The body collides as [`BodyColliders`] posed by the same transforms; the floor is a plane.
+//! * A blow-up (non-finite positions, absurd speed or stretch, reported by the solver's guard)
+//!   resets the garment to its skinned pose instead of crashing, and is counted.
+//!
+//! Fit figures: per-vertex strain (the largest stretch of its edges against their rest length,
+//! in %) and the gap between the garment and the body.
+
+use glam::{Affine3A, Vec3};
+use serde::Serialize;
+
+use fitroom_body::colliders::{BodyColliders, ColliderOptions, round_cone_distance};
+use fitroom_body::{BodyModel, RestPose};
+use fitroom_cloth::{
+    ClothError, ClothMesh, ClothSolver, Fabric, Health, Plane, SolverSettings, Sphere, StepReport,
+};
+
+/// What the simulation needs of a garment.
+#[derive(Clone, Debug)]
+pub struct SimGarment {
+    /// Rest positions, body model space, metres.
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+    /// Vertices that follow the body.
+    pub attached: Vec<u32>,
+    pub fabric: Fabric,
+}
+
+/// Why a garment cannot be simulated.
+#[derive(Debug, thiserror::Error)]
+pub enum SimError {
+    #[error("cloth: {0}")]
+    Cloth(#[from] ClothError),
+    #[error("body colliders: {0}")]
+    Colliders(#[from] fitroom_body::colliders::ColliderError),
+    #[error("{got} skinning transforms, the body has {expected} bones")]
+    Bones { got: usize, expected: usize },
+}
+
+/// Per-step figures.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+pub struct SimStep {
+    /// Deepest particle inside a body collider after the step, metres (0 if none).
+    pub max_penetration_m: f32,
+    /// Largest edge stretch, % over rest length.
+    pub max_strain_pct: f32,
+    /// Whether the step blew up and the garment was reset to its skinned pose.
+    pub reset: bool,
+    pub max_speed_m_s: f32,
+    /// CPU time of the step's simulation (attachment targets, colliders, the solver), ms; the
+    /// figures above are measured after it and not counted.
+    pub solve_ms: f64,
+}
+
+/// A garment on a body.
+pub struct GarmentSim {
+    solver: ClothSolver,
+    rest: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+    attached: Vec<u32>,
+    /// Per garment vertex: bone indices and weights (from the nearest body vertex).
+    skin: Vec<([u16; 4], [f32; 4])>,
+    colliders: BodyColliders,
+    bones: usize,
+    edges: Vec<(u32, u32, f32)>,
+    floor_y: Option<f32>,
+    resets: u32,
+    measuring: bool,
+}
+
+/// Index of the nearest point of `points` for each of `queries` (a uniform grid of 3 cm cells;
+/// falls back to a full search where the neighbourhood is empty).
+fn nearest(points: &[Vec3], queries: &[Vec3]) -> Vec<usize> {
+    use std::collections::HashMap;
+    let cell = 0.03f32;
+    let key = |p: Vec3| {
+        (
+            (p.x / cell).floor() as i32,
+            (p.y / cell).floor() as i32,
+            (p.z / cell).floor() as i32,
+        )
+    };
+    let mut grid: HashMap<(i32, i32, i32), Vec<usize>> = HashMap::new();
+    for (i, &p) in points.iter().enumerate() {
+        grid.entry(key(p)).or_default().push(i);
+    }
+    queries
+        .iter()
+        .map(|&q| {
+            let (x, y, z) = key(q);
+            let mut best: Option<(f32, usize)> = None;
+            for r in 1..=4 {
+                for dx in -r..=r {
+                    for dy in -r..=r {
+                        for dz in -r..=r {
+                            if let Some(list) = grid.get(&(x + dx, y + dy, z + dz)) {
+                                for &i in list {
+                                    let d = points[i].distance_squared(q);
+                                    if best.is_none_or(|b| d < b.0) {
+                                        best = Some((d, i));
+                                    }
+                                }
+                            }
+                        }
+                    }
+                }
+                // Anything found within r cells is exact once r cells cover its distance.
+                if let Some((d, _)) = best
+                    && d.sqrt() <= (r as f32 - 1.0) * cell
+                {
+                    break;
+                }
+            }
+            best.map(|b| b.1).unwrap_or_else(|| {
+                points
+                    .iter()
+                    .enumerate()
+                    .min_by(|a, b| a.1.distance_squared(q).total_cmp(&b.1.distance_squared(q)))
+                    .map_or(0, |(i, _)| i)
+            })
+        })
+        .collect()
+}
+
+impl GarmentSim {
+    /// A garment on the body with these (shaped) positions and rest pose.
+    pub fn new(
+        model: &BodyModel,
+        body_positions: &[Vec3],
+        rest: &RestPose,
+        garment: &SimGarment,
+        settings: SolverSettings,
+    ) -> Result<Self, SimError> {
+        let mesh = ClothMesh::new(garment.positions.clone(), garment.triangles.clone())?;
+        let solver = ClothSolver::new(&mesh, garment.fabric, &garment.attached, settings)?;
+        let colliders =
+            BodyColliders::fit(model, body_positions, rest, &ColliderOptions::default())?;
+        // Every vertex takes the skin of its nearest body vertex: the attached ones follow the
+        // body with it, and a reset puts the whole garment where the skinned body is, outside
+        // it as it was placed.
+        let body = &body_positions[..model.body_vertex_count as usize];
+        let skin = nearest(body, &garment.positions)
+            .into_iter()
+            .map(|v| (model.skin_joints[v], model.skin_weights[v]))
+            .collect();
+        let mut edges: Vec<(u32, u32, f32)> = Vec::new();
+        for t in &garment.triangles {
+            for k in 0..3 {
+                let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
+                edges.push((a, b, 0.0));
+            }
+        }
+        edges.sort_by_key(|e| (e.0, e.1));
+        edges.dedup_by_key(|e| (e.0, e.1));
+        for e in &mut edges {
+            e.2 = garment.positions[e.0 as usize].distance(garment.positions[e.1 as usize]);
+        }
+        Ok(Self {
+            solver,
+            rest: garment.positions.clone(),
+            triangles: garment.triangles.clone(),
+            attached: garment.attached.clone(),
+            skin,
+            colliders,
+            bones: model.bones.len(),
+            edges,
+            floor_y: None,
+            resets: 0,
+            measuring: true,
+        })
+    }
+
+    /// Whether [`GarmentSim::step`] measures penetration and strain after each step (on by
+    /// default; the app turns it off and asks for the strain only when it draws the fit map).
+    pub fn set_measuring(&mut self, on: bool) {
+        self.measuring = on;
+    }
+
+    /// A floor (horizontal plane at height `y` in the simulation's space), or none.
+    pub fn set_floor(&mut self, y: Option<f32>) -> Result<(), SimError> {
+        self.floor_y = y;
+        let planes: Vec<Plane> = y.map(Plane::floor).into_iter().collect();
+        self.solver.set_planes(&planes)?;
+        Ok(())
+    }
+
+    fn skin_point(&self, v: usize, skinning: &[Affine3A]) -> Vec3 {
+        let (j, w) = self.skin[v];
+        let p = self.rest[v];
+        let mut out = Vec3::ZERO;
+        for k in 0..4 {
+            if w[k] > 0.0
+                && let Some(m) = skinning.get(j[k] as usize)
+            {
+                out += m.transform_point3(p) * w[k];
+            }
+        }
+        out
+    }
+
+    /// The garment skinned like the body (its pose without simulation).
+    pub fn skinned(&self, skinning: &[Affine3A]) -> Vec<Vec3> {
+        (0..self.rest.len())
+            .map(|v| self.skin_point(v, skinning))
+            .collect()
+    }
+
+    fn check(&self, skinning: &[Affine3A]) -> Result<(), SimError> {
+        if skinning.len() != self.bones {
+            return Err(SimError::Bones {
+                got: skinning.len(),
+                expected: self.bones,
+            });
+        }
+        Ok(())
+    }
+
+    fn colliders(&self, skinning: &[Affine3A]) -> (Vec<Sphere>, Vec<[u32; 2]>) {
+        let mut spheres = Vec::new();
+        let mut capsules = Vec::new();
+        for (a, b, ra, rb) in self.colliders.posed(skinning) {
+            let i = spheres.len() as u32;
+            spheres.push(Sphere::new(a, ra));
+            if a.distance(b) > 1e-6 {
+                spheres.push(Sphere::new(b, rb));
+                capsules.push([i, i + 1]);
+            }
+        }
+        (spheres, capsules)
+    }
+
+    /// Puts the garment in its skinned pose, at rest, with the colliders where they are.
+    pub fn reset(&mut self, skinning: &[Affine3A]) -> Result<(), SimError> {
+        self.check(skinning)?;
+        let skinned = self.skinned(skinning);
+        self.solver.reset_to(&skinned)?;
+        let (spheres, capsules) = self.colliders(skinning);
+        self.solver.set_colliders(&spheres, &capsules)?;
+        self.solver.teleport_colliders();
+        Ok(())
+    }
+
+    /// One step of `dt` seconds towards the body posed by `skinning` (rest model space to the
+    /// simulation's space, one per bone).
+    pub fn step(&mut self, skinning: &[Affine3A], dt: f32) -> Result<SimStep, SimError> {
+        self.check(skinning)?;
+        let start = std::time::Instant::now();
+        let targets: Vec<Vec3> = self
+            .attached
+            .iter()
+            .map(|&v| self.skin_point(v as usize, skinning))
+            .collect();
+        self.solver.set_attachment_targets(&targets)?;
+        let (spheres, capsules) = self.colliders(skinning);
+        self.solver.set_colliders(&spheres, &capsules)?;
+        let report: StepReport = self.solver.step(dt)?;
+        let mut reset = false;
+        if !matches!(report.health, Health::Ok) {
+            self.resets += 1;
+            reset = true;
+            self.reset(skinning)?;
+        }
+        let solve_ms = start.elapsed().as_secs_f64() * 1e3;
+        let (max_penetration_m, max_strain_pct) = if self.measuring {
+            (
+                self.max_penetration(skinning),
+                self.strain_pct().into_iter().fold(0.0, f32::max),
+            )
+        } else {
+            (0.0, 0.0)
+        };
+        Ok(SimStep {
+            solve_ms,
+            max_penetration_m,
+            max_strain_pct,
+            reset,
+            max_speed_m_s: report.max_speed_m_s,
+        })
+    }
+
+    /// The garment's current positions.
+    pub fn positions(&self) -> Vec<Vec3> {
+        self.solver
+            .positions()
+            .iter()
+            .map(|&p| Vec3::from(p))
+            .collect()
+    }
+
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        &self.triangles
+    }
+
+    /// Blow-ups that were reset so far.
+    pub fn resets(&self) -> u32 {
+        self.resets
+    }
+
+    /// Per vertex: the largest stretch of its edges over their rest length, % (negative when
+    /// all its edges are compressed).
+    pub fn strain_pct(&self) -> Vec<f32> {
+        let p = self.solver.positions();
+        let mut out = vec![f32::NEG_INFINITY; p.len()];
+        for &(a, b, rest) in &self.edges {
+            if rest <= 0.0 {
+                continue;
+            }
+            let s = (p[a as usize].distance(p[b as usize]) / rest - 1.0) * 100.0;
+            for v in [a, b] {
+                let o = &mut out[v as usize];
+                *o = o.max(s);
+            }
+        }
+        for o in &mut out {
+            if !o.is_finite() {
+                *o = 0.0;
+            }
+        }
+        out
+    }
+
+    /// Per vertex: distance to the posed body colliders' surface, metres (negative inside).
+    pub fn gap_m(&self, skinning: &[Affine3A]) -> Vec<f32> {
+        let posed = self.colliders.posed(skinning);
+        self.solver
+            .positions()
+            .iter()
+            .map(|&q| {
+                posed
+                    .iter()
+                    .map(|&(a, b, ra, rb)| round_cone_distance(q.into(), a, b, ra, rb))
+                    .fold(f32::INFINITY, f32::min)
+            })
+            .collect()
+    }
+
+    /// Deepest particle inside a collider, metres (0 if none).
+    pub fn max_penetration(&self, skinning: &[Affine3A]) -> f32 {
+        self.gap_m(skinning)
+            .into_iter()
+            .fold(0.0f32, |m, d| m.max(-d))
+    }
+}

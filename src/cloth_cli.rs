@@ -1,0 +1,416 @@
+//! `fitroom cloth sim|fit|bench`: a garment simulated on the avatar without a window.
+//!
+//! * `sim`: the garment on the avatar walking a BVH clip (the motion pipeline's poses, 30 Hz,
+//!   interpolated to the 120 Hz cloth steps): per-step cost, penetration, strain, resets.
+//! * `fit`: the garment draped on the body standing in its rest pose: the fit map's figures
+//!   (strain, gap) and the ease at the bust, waist and hip.
+//! * `bench`: the cloth step's cost for the dress on the walking avatar, and its growth with
+//!   the particle count.
+
+use std::path::Path;
+
+use anyhow::{Context, Result, bail};
+use fitroom_body::{
+    BodyModel, Shape, ShapedBody,
+    measure::{Plane, cross_section, hull_perimeter},
+    skinning::{RigidTransform, skinning_matrices},
+};
+use fitroom_cloth::SolverSettings;
+use fitroom_garment::sim::{GarmentSim, SimGarment};
+use fitroom_garment::{BodySurface, BuildOptions, GarmentMesh, Pattern, load_fabric};
+use fitroom_motion::eval::{AvatarPipeline, clean_stream};
+use fitroom_sensor::bvh_source::BvhSource;
+use glam::{Affine3A, Quat, Vec2, Vec3};
+use serde::Serialize;
+
+/// The cloth rate.
+pub const STEP_HZ: f32 = 120.0;
+
+/// Loads a garment (pattern `.ron`, or a mesh garment `.obj` / `.glb` / `.gltf` with its
+/// fabric) in `size` on the body shaped by `shape`.
+pub fn load_garment(
+    model: &BodyModel,
+    shape: &Shape,
+    garment: &Path,
+    size: Option<&str>,
+) -> Result<(ShapedBody, GarmentMesh)> {
+    let shaped = model.shaped(shape)?;
+    let body = BodySurface::new(model, &shaped)?;
+    let ext = garment
+        .extension()
+        .and_then(|e| e.to_str())
+        .map(str::to_ascii_lowercase)
+        .unwrap_or_default();
+    let mesh = match ext.as_str() {
+        "ron" => {
+            let pattern = Pattern::load(garment)?;
+            let labels = pattern.size_labels();
+            let size = match size {
+                Some(s) => s.to_owned(),
+                None => labels
+                    .get(labels.len() / 2)
+                    .map(|s| s.to_string())
+                    .context("the garment has no sizes")?,
+            };
+            if !labels.contains(&size.as_str()) {
+                bail!(
+                    "'{}' has no size `{size}`; its sizes: {}",
+                    garment.display(),
+                    labels.join(", ")
+                );
+            }
+            pattern
+                .build(&body, &size, &BuildOptions::default())?
+                .welded(&body)?
+        }
+        "obj" | "glb" | "gltf" => {
+            let fabric_path = crate::assets::assets_dir()?.join("fabrics/cotton.ron");
+            let spec = load_fabric(&fabric_path)?;
+            if ext == "obj" {
+                fitroom_garment::load_obj(garment, &body, "cotton", spec)?
+            } else {
+                fitroom_garment::load_gltf(garment, &body, "cotton", spec)?
+            }
+        }
+        _ => bail!(
+            "'{}': a garment is a pattern (.ron) or a mesh (.obj, .glb, .gltf)",
+            garment.display()
+        ),
+    };
+    Ok((shaped, mesh))
+}
+
+fn sim_garment(mesh: &GarmentMesh) -> SimGarment {
+    // The static (skinned) part of a mesh garment is attached as a whole.
+    let mut attached: Vec<u32> = mesh.attached.clone();
+    attached.extend(
+        mesh.skinned
+            .iter()
+            .enumerate()
+            .filter(|(_, s)| **s)
+            .map(|(i, _)| i as u32),
+    );
+    attached.sort_unstable();
+    attached.dedup();
+    SimGarment {
+        positions: mesh.positions.clone(),
+        triangles: mesh.triangles.clone(),
+        attached,
+        fabric: mesh.fabric,
+    }
+}
+
+/// Skinning transforms (rest model space -> sensor space) of an avatar pose.
+fn skinning_of(rest: &fitroom_body::RestPose, rotations: &[Quat], heads: &[Vec3]) -> Vec<Affine3A> {
+    let posed: Vec<RigidTransform> = rotations
+        .iter()
+        .zip(heads)
+        .map(|(&r, &h)| RigidTransform::new(r, h))
+        .collect();
+    skinning_matrices(rest, &posed)
+}
+
+/// Summary statistics of a series.
+#[derive(Debug, Serialize, Clone, Copy, Default)]
+pub struct Stats {
+    pub mean: f64,
+    pub p50: f64,
+    pub p95: f64,
+    pub max: f64,
+}
+
+fn stats(mut v: Vec<f64>) -> Stats {
+    if v.is_empty() {
+        return Stats::default();
+    }
+    v.sort_by(|a, b| a.total_cmp(b));
+    let at = |q: f64| v[((v.len() - 1) as f64 * q).round() as usize];
+    Stats {
+        mean: v.iter().sum::<f64>() / v.len() as f64,
+        p50: at(0.5),
+        p95: at(0.95),
+        max: at(1.0),
+    }
+}
+
+/// The JSON of `fitroom cloth sim`.
+#[derive(Debug, Serialize)]
+pub struct SimReport {
+    pub garment: String,
+    pub size: String,
+    pub fabric: String,
+    pub particles: usize,
+    pub attached: usize,
+    pub colliders: usize,
+    pub motion: String,
+    /// Video frames simulated (each 1/30 s of the clip: four 120 Hz cloth steps).
+    pub frames: usize,
+    pub steps: usize,
+    pub substeps: u32,
+    /// CPU time of one 120 Hz cloth step (attachments, colliders, solve), ms.
+    pub step_ms: Stats,
+    /// CPU time of the cloth per video frame, ms.
+    pub frame_ms: Stats,
+    /// Deepest particle inside a body collider after a step, mm.
+    pub max_penetration_mm: f32,
+    /// Largest edge stretch over the run, %.
+    pub max_strain_pct: f32,
+    /// Blow-ups reset to the skinned pose.
+    pub resets: u32,
+    pub all_finite: bool,
+}
+
+/// `fitroom cloth sim`.
+pub fn sim(
+    model: &BodyModel,
+    shape: &Shape,
+    garment: &Path,
+    size: Option<&str>,
+    motion: &Path,
+    frames: usize,
+    threads: Option<usize>,
+) -> Result<(SimReport, GarmentSim, Vec<Affine3A>)> {
+    let (shaped, mesh) = load_garment(model, shape, garment, size)?;
+    let source = BvhSource::load(motion, Default::default())
+        .with_context(|| format!("cannot load the motion '{}'", motion.display()))?;
+    let floor_y = -source.options().sensor_height_m;
+    let skeleton = fitroom_motion::avatar_skeleton(model, &shaped.rest_pose)?;
+    let mut pipeline = AvatarPipeline::new(&skeleton, floor_y)?;
+    let stream = clean_stream(&source);
+    if stream.is_empty() {
+        bail!("'{}' has no frames", motion.display());
+    }
+    let mut settings = SolverSettings::default();
+    if let Some(t) = threads {
+        settings.threads = t.max(1);
+    }
+    let substeps = settings.substeps;
+    let mut sim = GarmentSim::new(
+        model,
+        &shaped.positions,
+        &shaped.rest_pose,
+        &sim_garment(&mesh),
+        settings,
+    )?;
+    sim.set_floor(Some(floor_y))?;
+    let dt_frame = 1.0 / 30.0;
+    let per_frame = (STEP_HZ / 30.0).round() as usize;
+    let mut prev: Option<(Vec<Quat>, Vec<Vec3>)> = None;
+    let (mut step_ms, mut frame_ms) = (Vec::new(), Vec::new());
+    let (mut max_pen, mut max_strain) = (0.0f32, 0.0f32);
+    let mut all_finite = true;
+    let mut last_skin = Vec::new();
+    for i in 0..frames {
+        let frame = &stream[i % stream.len()];
+        let pose = pipeline.pose(frame, dt_frame);
+        let now = (pose.rotations.clone(), pose.heads.clone());
+        let Some((r0, h0)) = prev.take() else {
+            let skin = skinning_of(&shaped.rest_pose, &now.0, &now.1);
+            sim.reset(&skin)?;
+            last_skin = skin;
+            prev = Some(now);
+            continue;
+        };
+        let mut this_frame = 0.0;
+        for k in 1..=per_frame {
+            let t = k as f32 / per_frame as f32;
+            let rot: Vec<Quat> = r0.iter().zip(&now.0).map(|(a, b)| a.slerp(*b, t)).collect();
+            let head: Vec<Vec3> = h0.iter().zip(&now.1).map(|(a, b)| a.lerp(*b, t)).collect();
+            let skin = skinning_of(&shaped.rest_pose, &rot, &head);
+            let step = sim.step(&skin, 1.0 / STEP_HZ)?;
+            step_ms.push(step.solve_ms);
+            this_frame += step.solve_ms;
+            max_pen = max_pen.max(step.max_penetration_m);
+            max_strain = max_strain.max(step.max_strain_pct);
+            last_skin = skin;
+        }
+        frame_ms.push(this_frame);
+        all_finite &= sim.positions().iter().all(|p| p.is_finite());
+        prev = Some(now);
+    }
+    let report = SimReport {
+        garment: mesh.name.clone(),
+        size: mesh.size.clone(),
+        fabric: mesh.fabric_name.clone(),
+        particles: mesh.positions.len(),
+        attached: mesh.attached.len(),
+        colliders: fitroom_body::colliders::BodyColliders::fit(
+            model,
+            &shaped.positions,
+            &shaped.rest_pose,
+            &Default::default(),
+        )?
+        .capsules
+        .len(),
+        motion: motion.display().to_string(),
+        frames,
+        steps: step_ms.len(),
+        substeps,
+        step_ms: stats(step_ms),
+        frame_ms: stats(frame_ms),
+        max_penetration_mm: max_pen * 1e3,
+        max_strain_pct: max_strain,
+        resets: sim.resets(),
+        all_finite,
+    };
+    Ok((report, sim, last_skin))
+}
+
+/// Ease of the garment at one landmark.
+#[derive(Debug, Serialize)]
+pub struct Ease {
+    pub landmark: &'static str,
+    /// Height above the sole, cm.
+    pub height_cm: f32,
+    pub body_girth_cm: f32,
+    /// `None` where the garment does not go round the body at that height.
+    pub garment_girth_cm: Option<f32>,
+    /// Garment minus body girth, cm.
+    pub ease_cm: Option<f32>,
+}
+
+/// The JSON of `fitroom cloth fit`.
+#[derive(Debug, Serialize)]
+pub struct FitMapReport {
+    pub garment: String,
+    pub size: String,
+    pub fabric: String,
+    pub particles: usize,
+    pub settle_s: f32,
+    pub max_strain_pct: f32,
+    pub mean_strain_pct: f32,
+    /// Mean distance of the garment from the body colliders, mm (positive outside).
+    pub mean_gap_mm: f32,
+    pub max_penetration_mm: f32,
+    pub ease: Vec<Ease>,
+}
+
+/// `fitroom cloth fit`: the garment settles on the body in its rest pose.
+pub fn fit_map(
+    model: &BodyModel,
+    shape: &Shape,
+    garment: &Path,
+    size: Option<&str>,
+    settle_s: f32,
+) -> Result<(FitMapReport, GarmentSim)> {
+    let (shaped, mesh) = load_garment(model, shape, garment, size)?;
+    let mut sim = GarmentSim::new(
+        model,
+        &shaped.positions,
+        &shaped.rest_pose,
+        &sim_garment(&mesh),
+        SolverSettings::default(),
+    )?;
+    let body = &shaped.positions[..model.body_vertex_count as usize];
+    let floor = body.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+    sim.set_floor(Some(floor))?;
+    let identity = vec![Affine3A::IDENTITY; model.bones.len()];
+    sim.reset(&identity)?;
+    let steps = (settle_s * STEP_HZ).round().max(1.0) as usize;
+    let mut max_pen = 0.0f32;
+    for _ in 0..steps {
+        let s = sim.step(&identity, 1.0 / STEP_HZ)?;
+        max_pen = max_pen.max(s.max_penetration_m);
+    }
+    let strain = sim.strain_pct();
+    let gap = sim.gap_m(&identity);
+    let measured = model.measure(&shaped.positions)?;
+    let l = &measured.landmarks;
+    let girth_at = |points: &[Vec3], tris: &[[u32; 3]], h: f32, keep: &dyn Fn(Vec2) -> bool| {
+        let loops = cross_section(points, tris, &Plane::horizontal(h));
+        let pts: Vec<Vec2> = loops
+            .iter()
+            .filter(|l| keep(l.centroid()))
+            .flat_map(|l| l.points.iter().copied())
+            .collect();
+        (pts.len() >= 3).then(|| hull_perimeter(&pts) * 100.0)
+    };
+    let mut ease = Vec::new();
+    for (name, h_cm, body_cm) in [
+        ("bust", l.bust_cm, measured.bust_cm),
+        ("waist", l.waist_cm, measured.waist_cm),
+        ("hip", l.hip_cm, measured.hip_cm),
+    ] {
+        let h = floor + h_cm / 100.0;
+        // The garment's loops around the trunk (not a sleeve).
+        let g = girth_at(&sim.positions(), sim.triangles(), h, &|c: Vec2| {
+            c.x.abs() < 0.12
+        });
+        ease.push(Ease {
+            landmark: name,
+            height_cm: h_cm,
+            body_girth_cm: body_cm,
+            garment_girth_cm: g,
+            ease_cm: g.map(|g| g - body_cm),
+        });
+    }
+    let n = strain.len().max(1) as f32;
+    let report = FitMapReport {
+        garment: mesh.name.clone(),
+        size: mesh.size.clone(),
+        fabric: mesh.fabric_name.clone(),
+        particles: mesh.positions.len(),
+        settle_s,
+        max_strain_pct: strain.iter().copied().fold(0.0, f32::max),
+        mean_strain_pct: strain.iter().sum::<f32>() / n,
+        mean_gap_mm: gap.iter().sum::<f32>() / gap.len().max(1) as f32 * 1e3,
+        max_penetration_mm: max_pen * 1e3,
+        ease,
+    };
+    Ok((report, sim))
+}
+
+/// The JSON of `fitroom cloth bench`.
+#[derive(Debug, Serialize)]
+pub struct BenchReport {
+    /// The dress on the walking avatar.
+    pub dress: SimReport,
+    /// Per particle count (cylinders around the body's colliders, 10 substeps, 120 Hz): one
+    /// step's cost, ms.
+    pub scaling: Vec<(usize, Stats)>,
+    pub threads: usize,
+    pub goal_ms: f64,
+}
+
+/// `fitroom cloth bench`.
+pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> Result<BenchReport> {
+    let (dress, _, _) = sim(model, &Shape::default(), dress, None, motion, frames, None)?;
+    let shaped = model.shaped(&Shape::default())?;
+    let mut scaling = Vec::new();
+    for (around, rows) in [(32u32, 32u32), (64, 64), (128, 128), (256, 256)] {
+        // A tube around the hips and legs: a skirt-like cloth of around × rows particles.
+        // Around the hips (model space: the hips at about y = 0), hanging to the knees.
+        let mesh =
+            fitroom_cloth::ClothMesh::cylinder(Vec3::new(0.0, -0.45, 0.0), 0.2, 0.5, around, rows)?;
+        let positions: Vec<Vec3> = mesh.positions().to_vec();
+        let attached: Vec<u32> =
+            fitroom_cloth::ClothMesh::cylinder_ring(around, rows - 1).collect();
+        let garment = SimGarment {
+            positions,
+            triangles: mesh.triangles().to_vec(),
+            attached,
+            fabric: fitroom_cloth::Fabric::cotton(),
+        };
+        let mut s = GarmentSim::new(
+            model,
+            &shaped.positions,
+            &shaped.rest_pose,
+            &garment,
+            SolverSettings::default(),
+        )?;
+        let identity = vec![Affine3A::IDENTITY; model.bones.len()];
+        s.reset(&identity)?;
+        let mut times = Vec::new();
+        let n = if around >= 256 { 10 } else { 40 };
+        for _ in 0..n {
+            times.push(s.step(&identity, 1.0 / STEP_HZ)?.solve_ms);
+        }
+        scaling.push(((around * rows) as usize, stats(times)));
+    }
+    Ok(BenchReport {
+        dress,
+        scaling,
+        threads: SolverSettings::default().threads,
+        goal_ms: 0.6,
+    })
+}
