@@ -153,10 +153,19 @@ pub struct SimReport {
     pub frame_ms: Stats,
     /// Deepest particle inside a body collider after a step, mm.
     pub max_penetration_mm: f32,
-    /// Largest edge stretch over the run, %.
+    /// Largest edge stretch over the run, % (includes the start, where the garment is put in
+    /// the skinned pose of the first frame).
     pub max_strain_pct: f32,
+    /// Per-vertex strain (largest stretch of its edges, %) at the end of the run.
+    pub final_strain_pct: Stats,
+    /// Longest tether over the run against its rest geodesic length (the limit is 1.1).
+    pub max_tether_ratio: f32,
     /// Blow-ups reset to the skinned pose.
     pub resets: u32,
+    /// The first blow-up's cause, if any.
+    pub first_blow_up: Option<String>,
+    /// Body teleports (the clip looping) the garment was carried across.
+    pub teleports: u32,
     pub all_finite: bool,
 }
 
@@ -199,6 +208,8 @@ pub fn sim(
     let (mut step_ms, mut frame_ms) = (Vec::new(), Vec::new());
     let (mut max_pen, mut max_strain) = (0.0f32, 0.0f32);
     let mut all_finite = true;
+    let mut first_blow_up: Option<String> = None;
+    let mut max_tether = 0.0f32;
     let mut last_skin = Vec::new();
     for i in 0..frames {
         let frame = &stream[i % stream.len()];
@@ -220,6 +231,10 @@ pub fn sim(
             let step = sim.step(&skin, 1.0 / STEP_HZ)?;
             step_ms.push(step.solve_ms);
             this_frame += step.solve_ms;
+            if first_blow_up.is_none() {
+                first_blow_up = step.blow_up.clone();
+            }
+            max_tether = max_tether.max(sim.max_tether_ratio());
             max_pen = max_pen.max(step.max_penetration_m);
             max_strain = max_strain.max(step.max_strain_pct);
             last_skin = skin;
@@ -250,7 +265,11 @@ pub fn sim(
         frame_ms: stats(frame_ms),
         max_penetration_mm: max_pen * 1e3,
         max_strain_pct: max_strain,
+        final_strain_pct: stats(sim.strain_pct().into_iter().map(f64::from).collect()),
+        max_tether_ratio: max_tether,
         resets: sim.resets(),
+        first_blow_up,
+        teleports: sim.teleports(),
         all_finite,
     };
     Ok((report, sim, last_skin))

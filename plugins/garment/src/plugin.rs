@@ -360,7 +360,10 @@ fn step_garment(
             match g.sim.step(&pose, dt) {
                 Ok(s) => {
                     if s.reset {
-                        warn!("the garment blew up and was reset to its skinned pose");
+                        warn!(
+                            "the garment blew up ({}) and was reset to its skinned pose",
+                            s.blow_up.as_deref().unwrap_or("?")
+                        );
                     }
                     status.max_strain_pct = s.max_strain_pct;
                 }

@@ -46,7 +46,7 @@ pub enum SimError {
 }
 
 /// Per-step figures.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Serialize)]
+#[derive(Clone, Debug, Default, PartialEq, Serialize)]
 pub struct SimStep {
     /// Deepest particle inside a body collider after the step, metres (0 if none).
     pub max_penetration_m: f32,
@@ -54,6 +54,8 @@ pub struct SimStep {
     pub max_strain_pct: f32,
     /// Whether the step blew up and the garment was reset to its skinned pose.
     pub reset: bool,
+    /// What the blow-up guard saw, if it fired.
+    pub blow_up: Option<String>,
     pub max_speed_m_s: f32,
     /// CPU time of the step's simulation (attachment targets, colliders, the solver), ms; the
     /// figures above are measured after it and not counted.
@@ -74,6 +76,90 @@ pub struct GarmentSim {
     floor_y: Option<f32>,
     resets: u32,
     measuring: bool,
+    /// Attachment targets of the last step, to notice a teleported body.
+    last_targets: Option<Vec<Vec3>>,
+    teleports: u32,
+}
+
+/// An attached vertex moving farther than this in one step means the body was teleported
+/// (a clip looping, a tracked person replaced): the garment moves with it instead of being
+/// dragged (30 m/s at 120 Hz).
+const TELEPORT_M: f32 = 0.25;
+
+/// The skin offset kept over the body colliders, metres: they lie up to 1.5 cm inside the
+/// skin and up to 3 cm at the front of the thighs (so they never stick out of it; see
+/// [`fitroom_body::colliders`]), and cloth kept 3 mm
+/// over them would sink into the rendered skin.
+pub const BODY_SKIN_OFFSET_M: f32 = 0.020;
+
+/// Smoothing passes of the garment's skin weights over its mesh.
+const SKIN_SMOOTHING: usize = 12;
+
+/// Skin weights averaged with the mesh neighbours' `passes` times (Jacobi), then cut to the
+/// four largest and renormalised.
+fn smooth_skin(
+    skin: Vec<([u16; 4], [f32; 4])>,
+    triangles: &[[u32; 3]],
+    bones: usize,
+    passes: usize,
+) -> Vec<([u16; 4], [f32; 4])> {
+    let n = skin.len();
+    let mut dense = vec![0.0f32; n * bones];
+    for (v, (j, w)) in skin.iter().enumerate() {
+        for k in 0..4 {
+            if let Some(slot) = dense.get_mut(v * bones + j[k] as usize) {
+                *slot += w[k];
+            }
+        }
+    }
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            if a < n && b < n {
+                neighbours[a].push(b as u32);
+                neighbours[b].push(a as u32);
+            }
+        }
+    }
+    for list in &mut neighbours {
+        list.sort_unstable();
+        list.dedup();
+    }
+    let mut next = dense.clone();
+    for _ in 0..passes {
+        for v in 0..n {
+            let count = (neighbours[v].len() + 1) as f32;
+            for b in 0..bones {
+                let mut sum = dense[v * bones + b];
+                for &u in &neighbours[v] {
+                    sum += dense[u as usize * bones + b];
+                }
+                next[v * bones + b] = sum / count;
+            }
+        }
+        std::mem::swap(&mut dense, &mut next);
+    }
+    (0..n)
+        .map(|v| {
+            let row = &dense[v * bones..(v + 1) * bones];
+            let mut idx: Vec<usize> = (0..bones).collect();
+            idx.sort_by(|&a, &b| row[b].total_cmp(&row[a]));
+            let mut j = [0u16; 4];
+            let mut w = [0.0f32; 4];
+            for k in 0..4.min(bones) {
+                j[k] = idx[k] as u16;
+                w[k] = row[idx[k]];
+            }
+            let total: f32 = w.iter().sum();
+            if total > 0.0 {
+                for x in &mut w {
+                    *x /= total;
+                }
+            }
+            (j, w)
+        })
+        .collect()
 }
 
 /// Index of the nearest point of `points` for each of `queries` (a uniform grid of 3 cm cells;
@@ -140,17 +226,27 @@ impl GarmentSim {
         settings: SolverSettings,
     ) -> Result<Self, SimError> {
         let mesh = ClothMesh::new(garment.positions.clone(), garment.triangles.clone())?;
+        let settings = SolverSettings {
+            collision_thickness: settings.collision_thickness.max(BODY_SKIN_OFFSET_M),
+            ..settings
+        };
         let solver = ClothSolver::new(&mesh, garment.fabric, &garment.attached, settings)?;
         let colliders =
             BodyColliders::fit(model, body_positions, rest, &ColliderOptions::default())?;
-        // Every vertex takes the skin of its nearest body vertex: the attached ones follow the
-        // body with it, and a reset puts the whole garment where the skinned body is, outside
-        // it as it was placed.
+        // Every vertex takes the skin of its nearest body vertex, smoothed over the garment's
+        // mesh (a sleeve's armpit edge would otherwise be torn between the arm and the chest in
+        // a pose): the attached ones follow the body with it, and a reset puts the whole garment
+        // where the skinned body is, outside it as it was placed.
         let body = &body_positions[..model.body_vertex_count as usize];
-        let skin = nearest(body, &garment.positions)
-            .into_iter()
-            .map(|v| (model.skin_joints[v], model.skin_weights[v]))
-            .collect();
+        let skin = smooth_skin(
+            nearest(body, &garment.positions)
+                .into_iter()
+                .map(|v| (model.skin_joints[v], model.skin_weights[v]))
+                .collect(),
+            &garment.triangles,
+            model.bones.len(),
+            SKIN_SMOOTHING,
+        );
         let mut edges: Vec<(u32, u32, f32)> = Vec::new();
         for t in &garment.triangles {
             for k in 0..3 {
@@ -167,7 +263,11 @@ impl GarmentSim {
             solver,
             rest: garment.positions.clone(),
             triangles: garment.triangles.clone(),
-            attached: garment.attached.clone(),
+            attached: {
+                let mut a = garment.attached.clone();
+                a.sort_unstable();
+                a
+            },
             skin,
             colliders,
             bones: model.bones.len(),
@@ -175,6 +275,8 @@ impl GarmentSim {
             floor_y: None,
             resets: 0,
             measuring: true,
+            last_targets: None,
+            teleports: 0,
         })
     }
 
@@ -258,12 +360,26 @@ impl GarmentSim {
             .iter()
             .map(|&v| self.skin_point(v as usize, skinning))
             .collect();
+        let jumped = self.last_targets.as_ref().is_some_and(|last| {
+            last.iter()
+                .zip(&targets)
+                .any(|(a, b)| a.distance(*b) > TELEPORT_M)
+        });
+        if jumped {
+            // The body jumped: carry the garment along (its skinned pose, colliders teleported)
+            // and simulate from there.
+            self.teleports += 1;
+            self.reset(skinning)?;
+        }
+        self.last_targets = Some(targets.clone());
         self.solver.set_attachment_targets(&targets)?;
         let (spheres, capsules) = self.colliders(skinning);
         self.solver.set_colliders(&spheres, &capsules)?;
         let report: StepReport = self.solver.step(dt)?;
         let mut reset = false;
-        if !matches!(report.health, Health::Ok) {
+        let mut blow_up = None;
+        if let Health::BlownUp(why) = &report.health {
+            blow_up = Some(format!("{why:?}"));
             self.resets += 1;
             reset = true;
             self.reset(skinning)?;
@@ -278,6 +394,7 @@ impl GarmentSim {
             (0.0, 0.0)
         };
         Ok(SimStep {
+            blow_up,
             solve_ms,
             max_penetration_m,
             max_strain_pct,
@@ -297,6 +414,16 @@ impl GarmentSim {
 
     pub fn triangles(&self) -> &[[u32; 3]] {
         &self.triangles
+    }
+
+    /// Longest tether over its allowed length (1.0 = at the limit).
+    pub fn max_tether_ratio(&self) -> f32 {
+        self.solver.max_tether_ratio()
+    }
+
+    /// Body teleports the garment followed so far.
+    pub fn teleports(&self) -> u32 {
+        self.teleports
     }
 
     /// Blow-ups that were reset so far.
@@ -342,10 +469,13 @@ impl GarmentSim {
             .collect()
     }
 
-    /// Deepest particle inside a collider, metres (0 if none).
+    /// Deepest simulated (free) particle inside a collider, metres (0 if none). Attached
+    /// particles are where the skinned body puts them, not the solver.
     pub fn max_penetration(&self, skinning: &[Affine3A]) -> f32 {
         self.gap_m(skinning)
             .into_iter()
-            .fold(0.0f32, |m, d| m.max(-d))
+            .enumerate()
+            .filter(|(i, _)| self.attached.binary_search(&(*i as u32)).is_err())
+            .fold(0.0f32, |m, (_, d)| m.max(-d))
     }
 }

@@ -1,0 +1,101 @@
+//! The robustness acceptance on the avatar: garments through 10,000 frames of the
+//! shared walking clips (their 120 Hz frames, one cloth step each, the clips looping, which
+//! teleports the body back to its start): no NaN.
+//! Not met yet, and only guarded against regressions here (40 mm, tethers 2.0, 10 resets per
+//! clip): the 5 mm (the dress reaches 4-25 mm, worst on 16_11, where the skirt is
+//! caught between the thighs' colliders, which overlap in a stride), 110% tethers (1.04-1.62)
+//! and no blow-up (0-3 resets per clip, from the stretch guard). The figures are printed per
+//! clip.
+
+mod common;
+
+use std::path::PathBuf;
+
+fn walking_clips() -> Vec<(PathBuf, usize)> {
+    let dir = common::shared_dir().join("data/mocap/cmu");
+    let index = std::fs::read_to_string(dir.join("INDEX.tsv")).expect("INDEX.tsv");
+    index
+        .lines()
+        .skip(1)
+        .filter_map(|l| {
+            let f: Vec<&str> = l.split('\t').collect();
+            let desc = f.get(5)?;
+            let frames: usize = f.get(3)?.parse().ok()?;
+            (desc.starts_with("walk") || desc.starts_with("slow walk"))
+                .then(|| (dir.join(f[0]), frames))
+        })
+        .collect()
+}
+
+#[test]
+fn garments_survive_ten_thousand_frames_of_walking() {
+    let model = fitroom_body::BodyModel::read(
+        &fitroom::assets::assets_dir()
+            .expect("assets")
+            .join(fitroom::assets::DEFAULT_BODY),
+    )
+    .expect("body");
+    let garments = fitroom::assets::assets_dir()
+        .expect("assets")
+        .join("garments");
+    let clips = walking_clips();
+    assert!(clips.len() >= 5, "{clips:?}");
+    let total: usize = clips.iter().map(|c| c.1).sum();
+    // Loop the clips until 10,000 of their frames (120 Hz) have been stepped: a 30 Hz video
+    // frame is four cloth steps.
+    let loops = 10_000usize.div_ceil(total);
+    let mut steps = 0;
+    for (garment, clips_for) in [
+        ("sundress.ron", clips.clone()),
+        ("skirt.ron", clips[..2].to_vec()),
+    ] {
+        for (clip, frames_120) in &clips_for {
+            let frames = (frames_120 * loops).div_ceil(4) + 1;
+            let (r, _, _) = fitroom::cloth_cli::sim(
+                &model,
+                &fitroom_body::Shape::default(),
+                &garments.join(garment),
+                None,
+                clip,
+                frames,
+                None,
+            )
+            .unwrap_or_else(|e| panic!("{garment} on {}: {e:#}", clip.display()));
+            println!(
+                "{garment} on {}: {} steps, penetration {:.2} mm, tether {:.3}, strain at the end p95 {:.1}% max {:.1}%, resets {}, step {:.2} ms",
+                clip.display(),
+                r.steps,
+                r.max_penetration_mm,
+                r.max_tether_ratio,
+                r.final_strain_pct.p95,
+                r.final_strain_pct.max,
+                r.resets,
+                r.step_ms.mean
+            );
+            if garment == "sundress.ron" {
+                steps += r.steps;
+            }
+            assert!(r.all_finite, "{garment} {}: NaN", clip.display());
+            assert!(
+                r.max_penetration_mm <= 40.0,
+                "{garment} {}: {} mm inside",
+                clip.display(),
+                r.max_penetration_mm
+            );
+            assert!(
+                r.max_tether_ratio <= 2.0,
+                "{garment} {}: tether at {}",
+                clip.display(),
+                r.max_tether_ratio
+            );
+            assert!(
+                r.resets <= 10,
+                "{garment} {}: {} resets, first {:?}",
+                clip.display(),
+                r.resets,
+                r.first_blow_up
+            );
+        }
+    }
+    assert!(steps >= 10_000, "only {steps} steps of the dress");
+}
