@@ -1,4 +1,4 @@
-//! Packed XPBD constraints, their projections, and the greedy colouring that batches them.
+//! Packed XPBD constraints, their projections, and how they are split into parallel work.
 //!
 //! **Distance** (stretch and shear): `C = |xᵢ − xⱼ| − L`, projected as in XPBD (Macklin et
 //! al. 2016): `Δλ = −(C + α̃λ) / (wᵢ + wⱼ + α̃)`, `Δxᵢ = wᵢ n Δλ`, `Δxⱼ = −wⱼ n Δλ`.
@@ -8,90 +8,166 @@
 //! and the rest-shape cotangent weights `K = (c₀₃+c₀₄, c₀₁+c₀₂, −c₀₁−c₀₃, −c₀₂−c₀₄)`, the
 //! energy `E = k_b/2 · 3/(A₀+A₁) |Σ Kᵢxᵢ|²` is the 3-vector constraint
 //! `C = √(3/(A₀+A₁)) Σ Kᵢxᵢ` with compliance `1/k_b`. `C` is linear in the positions, so its
-//! three components share one denominator `Σ wᵢkᵢ² + α̃` and the projection is exact in one
-//! step. A flat rest stencil has `C = 0` at rest. For a curved rest shape (a garment modelled
-//! in 3-D) the rest value of `C` is stored in the stencil's own frame (edge direction, mean
-//! normal of the two triangles, their cross product) and the constraint asks `C` to equal
-//! that vector re-expressed in the current frame; this keeps the rest shape the minimum and
-//! is invariant to rigid motion. (Bergou's model assumes a flat rest shape; this rest-frame
-//! target is our extension.)
+//! three components share one denominator `Σ wᵢkᵢ² + α̃` (precomputed but for `α̃`) and the
+//! projection is exact in one step. A flat rest stencil has `C = 0` at rest. For a curved
+//! rest shape (a garment modelled in 3-D) the rest value of `C` is stored in the stencil's own
+//! frame (edge direction, mean normal of the two triangles, their cross product) and the
+//! constraint asks `C` to equal that vector re-expressed in the current frame; this keeps the
+//! rest shape the minimum and is invariant to rigid motion. (Bergou's model assumes a flat
+//! rest shape; this rest-frame target is our extension.) Flat stencils skip the frame.
 //!
-//! **Colouring.** Two constraints that share a free particle may not be projected at the same
-//! time. Constraints are coloured greedily in a fixed order (each takes the smallest colour
-//! none of its free particles has yet; attached particles, whose inverse mass is zero, are
-//! never written and do not conflict). Each colour is split into work items that run in
-//! parallel. Colours smaller than `TAIL_MIN` (96) constraints would cost a synchronisation each
-//! for little work: they are merged into one final *tail* batch projected sequentially, in a
-//! fixed order, by a single item. The colouring depends only on the mesh, never on the number
-//! of threads.
+//! **Blocks, seams and corners.** Constraints are solved Gauss–Seidel style, so two
+//! constraints that share a particle may not be projected at the same time. The particles are
+//! ordered by a recursive bisection of the rest shape ([`crate::order`]), whose blocks are
+//! compact patches of the garment. A constraint whose particles all lie in one block belongs
+//! to that block; the blocks' constraints are solved in parallel, one work item per block,
+//! with no synchronisation inside a block. A constraint that spans blocks belongs to the
+//! *seam* between its two blocks, or, near a point where seams meet (it touches three blocks,
+//! or a particle that constraints of two different seams touch), to a *corner* (seams and
+//! corners together: the *separators*). The seams of
+//! different pairs of blocks share no particle, nor do the corners (a corner is a connected
+//! cluster of such constraints), so a substep solves the blocks, then all seams in parallel,
+//! then all corners in parallel: three synchronisations per constraint iteration, whatever
+//! the mesh, instead of one per graph colour. Attached particles count like the others here:
+//! they are not written by constraints, but they are moved by the block that holds them.
+//!
+//! **Batches.** Within a work item, constraints are coloured greedily (each takes the smallest
+//! colour none of its free particles has yet, distance constraints first, in the mesh's
+//! order), and each colour is packed into batches of eight whose lanes share no particle
+//! ([`crate::simd`]); batches run one after the other, the eight lanes of a batch at once. Per
+//! colour the order is: distance constraints, flat bending stencils, curved ones (a batch with
+//! a curved stencil is solved as curved; its flat lanes skip the frame). Empty lanes point at
+//! a padding particle of their own item and change nothing. Everything here depends only on
+//! the mesh, never on the number of threads.
+
+use std::collections::VecDeque;
 
 use glam::Vec3A;
 
 use crate::fabric::{Fabric, bend_compliance, distance_compliance};
 use crate::mesh::MeshTopology;
+use crate::order::ParticleOrder;
 use crate::pool::SharedSlice;
+#[cfg(target_arch = "x86_64")]
+use crate::simd::Avx8;
+use crate::simd::{Baseline8, Isa, LANES, Lanes, V3, offset};
 
-/// Colours with fewer constraints than this are merged into the sequential tail batch.
-pub(crate) const TAIL_MIN: usize = 96;
-/// Distance constraints per work item.
-const DISTANCE_ITEM: usize = 384;
-/// Bending constraints per work item.
-const BEND_ITEM: usize = 192;
+/// Open batches the packer may still add to (a window over the constraint order).
+const PACK_WINDOW: usize = 32;
+/// An empty lane.
+const NONE: u32 = u32::MAX;
 
-/// A distance constraint with the inverse masses of its particles.
+/// Eight distance constraints, one per lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[repr(C)]
-pub(crate) struct DistanceConstraint {
-    pub i: u32,
-    pub j: u32,
-    pub rest: f32,
-    pub compliance: f32,
-    pub wi: f32,
-    pub wj: f32,
+#[repr(C, align(32))]
+pub(crate) struct DistanceBatch {
+    /// The two particles, as byte offsets ([`offset`]).
+    pub i: [u32; LANES],
+    pub j: [u32; LANES],
+    pub rest: [f32; LANES],
+    pub compliance: [f32; LANES],
+    pub wi: [f32; LANES],
+    pub wj: [f32; LANES],
 }
 
-/// An isometric bending constraint (one cache line).
+/// Eight isometric bending constraints, one per lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
-#[repr(C, align(16))]
-pub(crate) struct BendConstraint {
-    pub v: [u32; 4],
-    /// `√(3/(A₀+A₁)) Kᵢ`.
-    pub k: [f32; 4],
-    /// Inverse masses.
-    pub w: [f32; 4],
+#[repr(C, align(32))]
+pub(crate) struct BendBatch {
+    /// `v[q][lane]`: vertex `q` of the stencil, as a byte offset ([`offset`]).
+    pub v: [[u32; LANES]; 4],
+    /// `√(3/(A₀+A₁)) Kᵢ` for `i = 1, 2, 3` (`K₀ = −K₁ − K₂ − K₃`).
+    pub k: [[f32; LANES]; 3],
+    /// `wᵢ Kᵢ` (scaled as `k`) for `i = 0..4`: the step of vertex `i` per unit `Δλ`.
+    pub wk: [[f32; LANES]; 4],
+    /// `Σ wᵢ Kᵢ²`.
+    pub wkk: [f32; LANES],
     /// Rest value of `C` in the stencil frame (edge, normal, binormal); zero when flat.
-    pub rest: [f32; 3],
-    pub compliance: f32,
+    pub rest: [[f32; LANES]; 3],
 }
 
-/// One work item: a range of distance and a range of bending constraints.
+/// An isometric bending stencil before packing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct BendConstraint {
+    v: [u32; 4],
+    k: [f32; 4],
+    w: [f32; 4],
+    rest: [f32; 3],
+}
+
+/// A distance constraint before packing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+struct DistanceConstraint {
+    i: u32,
+    j: u32,
+    rest: f32,
+    compliance: f32,
+    wi: f32,
+    wj: f32,
+}
+
+/// What a run of batches holds.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub(crate) enum RunKind {
+    Distance,
+    FlatBend,
+    CurvedBend,
+}
+
+/// Consecutive batches of one kind, solved by one kernel call.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) struct Run {
+    pub kind: RunKind,
+    /// Range in `distance` or `bend`.
+    pub batches: (u32, u32),
+}
+
+/// One work item: a block, a seam or a corner, as runs of batches solved in order.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub(crate) struct ConstraintItem {
+    /// All the item's distance batches (consecutive), for the stretch check.
     pub distance: (u32, u32),
-    pub bend: (u32, u32),
+    /// Range in `runs`.
+    pub runs: (u32, u32),
+    /// The padding particle of this item's empty lanes.
+    pub padding: u32,
 }
 
-/// All constraints, sorted by colour, with the work items of each colour.
+/// All constraints, packed into batches and grouped into work items.
 #[derive(Debug, Clone, Default)]
 pub(crate) struct ConstraintSet {
-    pub distance: Vec<DistanceConstraint>,
-    pub distance_is_shear: Vec<bool>,
-    pub bend: Vec<BendConstraint>,
+    pub distance: Vec<DistanceBatch>,
+    pub bend: Vec<BendBatch>,
+    pub runs: Vec<Run>,
+    /// The blocks' items first (one per block, in block order), then the seams', then the
+    /// corners'.
     pub items: Vec<ConstraintItem>,
-    /// Item range of each colour; the last one is the tail when `has_tail`.
-    pub colours: Vec<(u32, u32)>,
-    pub has_tail: bool,
+    /// Item ranges of the seams and of the corners (each run in parallel after the blocks;
+    /// empty ones left out).
+    pub separator_levels: Vec<(u32, u32)>,
+    /// Compliance of every bending constraint, 1/(N·m).
+    pub bend_compliance: f32,
+    /// Number of distance and bending constraints (without empty lanes).
+    pub distance_count: usize,
+    pub bend_count: usize,
+    /// Stretch constraints (not shear) in mesh numbering: vertices and rest length.
+    pub stretch: Vec<(u32, u32, f32)>,
 }
 
 impl ConstraintSet {
+    /// Builds the constraints of `topology` (mesh numbering) in the particle numbering of
+    /// `order`; `inverse_mass` is in mesh order. Padding particles are numbered from the
+    /// particle count on, one per item.
     pub fn build(
         rest: &[glam::Vec3],
         topology: &MeshTopology,
         fabric: &Fabric,
         inverse_mass: &[f32],
+        order: &ParticleOrder,
     ) -> Self {
+        let to = |v: u32| order.to_solver[v as usize];
         let mut distance = Vec::new();
-        let mut is_shear = Vec::new();
+        let mut stretch = Vec::new();
         for (stencils, stiffness, shear) in [
             (&topology.stretch, fabric.stretch_stiffness_n_m, false),
             (&topology.shear, fabric.shear_stiffness_n_m, true),
@@ -104,150 +180,449 @@ impl ConstraintSet {
                 }
                 if let Some(compliance) = distance_compliance(stiffness, s.rest_length, s.area) {
                     distance.push(DistanceConstraint {
-                        i,
-                        j,
+                        i: to(i),
+                        j: to(j),
                         rest: s.rest_length,
                         compliance,
                         wi,
                         wj,
                     });
-                    is_shear.push(shear);
+                    if !shear {
+                        stretch.push((i, j, s.rest_length));
+                    }
                 }
             }
         }
         let mut bend = Vec::new();
-        if let Some(compliance) = bend_compliance(fabric.bend_stiffness_n_m) {
+        let compliance = bend_compliance(fabric.bend_stiffness_n_m);
+        if compliance.is_some() {
             for stencil in &topology.bending {
                 let w = stencil.map(|v| inverse_mass[v as usize]);
                 if w.iter().sum::<f32>() == 0.0 {
                     continue;
                 }
-                if let Some(c) = bend_stencil(rest, *stencil, w, compliance) {
+                if let Some(mut c) = bend_stencil(rest, *stencil, w) {
+                    c.v = c.v.map(to);
                     bend.push(c);
                 }
             }
         }
 
-        // Greedy colouring over distance constraints, then bending constraints.
-        let n = inverse_mass.len();
-        let mut used = vec![0u128; n];
-        let tail = u32::MAX;
-        let mut colour_of = |vertices: &[u32]| -> u32 {
-            let mut mask = 0u128;
-            for &v in vertices {
-                if inverse_mass[v as usize] > 0.0 {
-                    mask |= used[v as usize];
-                }
-            }
-            let colour = (!mask).trailing_zeros();
-            if colour >= 128 {
-                return tail;
-            }
-            for &v in vertices {
-                if inverse_mass[v as usize] > 0.0 {
-                    used[v as usize] |= 1u128 << colour;
-                }
-            }
-            colour
-        };
-        let distance_colour: Vec<u32> = distance.iter().map(|c| colour_of(&[c.i, c.j])).collect();
-        let bend_colour: Vec<u32> = bend.iter().map(|c| colour_of(&c.v)).collect();
-
-        let mut size = [0usize; 128];
-        for &c in distance_colour.iter().chain(bend_colour.iter()) {
-            if c != tail {
-                size[c as usize] += 1;
-            }
-        }
-        // Rank of each colour: big colours keep their order, small ones go to the tail.
-        let mut rank = [u32::MAX; 128];
-        let mut colours_kept = 0u32;
-        for c in 0..128 {
-            if size[c] >= TAIL_MIN {
-                rank[c] = colours_kept;
-                colours_kept += 1;
-            }
-        }
-        let rank_of = |c: u32| -> u32 {
-            if c == tail || rank[c as usize] == u32::MAX {
-                colours_kept
+        // Each constraint's blocks: one block (a block item), two (the seam between a pair of
+        // blocks) or more (a corner where blocks meet).
+        let blocks = order.blocks();
+        let n = order.to_mesh.len();
+        let block_of: Vec<u32> = (0..n as u32).map(|i| order.block_of(i)).collect();
+        let bend_base = distance.len() as u32;
+        let total = distance.len() + bend.len();
+        let particles_of = |k: u32| -> ([u32; 4], usize) {
+            if k < bend_base {
+                let c = &distance[k as usize];
+                ([c.i, c.j, 0, 0], 2)
             } else {
-                rank[c as usize]
+                (bend[(k - bend_base) as usize].v, 4)
             }
         };
-        let mut distance_order: Vec<usize> = (0..distance.len()).collect();
-        distance_order.sort_by_key(|&k| rank_of(distance_colour[k]));
-        let mut bend_order: Vec<usize> = (0..bend.len()).collect();
-        bend_order.sort_by_key(|&k| rank_of(bend_colour[k]));
-        let distance_rank: Vec<u32> = distance_order
-            .iter()
-            .map(|&k| rank_of(distance_colour[k]))
-            .collect();
-        let bend_rank: Vec<u32> = bend_order
-            .iter()
-            .map(|&k| rank_of(bend_colour[k]))
-            .collect();
-        let distance_sorted: Vec<DistanceConstraint> =
-            distance_order.iter().map(|&k| distance[k]).collect();
-        let shear_sorted: Vec<bool> = distance_order.iter().map(|&k| is_shear[k]).collect();
-        let bend_sorted: Vec<BendConstraint> = bend_order.iter().map(|&k| bend[k]).collect();
-
-        let range_of = |ranks: &[u32], r: u32| -> (u32, u32) {
-            let a = ranks.partition_point(|&x| x < r) as u32;
-            let b = ranks.partition_point(|&x| x <= r) as u32;
-            (a, b)
+        let blocks_of = |k: u32| -> (u32, u32, bool) {
+            let (ps, count) = particles_of(k);
+            let (mut lo, mut hi) = (u32::MAX, 0);
+            for &p in &ps[..count] {
+                lo = lo.min(block_of[p as usize]);
+                hi = hi.max(block_of[p as usize]);
+            }
+            let more = ps[..count]
+                .iter()
+                .any(|&p| ![lo, hi].contains(&block_of[p as usize]));
+            (lo, hi, more)
         };
-        let mut items = Vec::new();
-        let mut colours = Vec::new();
-        for r in 0..colours_kept {
-            let first = items.len() as u32;
-            let (a, b) = range_of(&distance_rank, r);
-            let mut k = a;
-            while k < b {
-                let e = (k + DISTANCE_ITEM as u32).min(b);
-                items.push(ConstraintItem {
-                    distance: (k, e),
-                    bend: (0, 0),
-                });
-                k = e;
+        // A particle touched by seam constraints of two different pairs of blocks is a corner
+        // particle; constraints at corners (touching a corner particle or three blocks) go to
+        // corner items, so that the seams of different pairs share no particle.
+        const NO_PAIR: (u32, u32) = (u32::MAX, u32::MAX);
+        let mut pair_of_particle = vec![NO_PAIR; n];
+        let mut corner = vec![false; n];
+        for k in 0..total as u32 {
+            let (lo, hi, more) = blocks_of(k);
+            if lo == hi {
+                continue;
             }
-            let (a, b) = range_of(&bend_rank, r);
-            let mut k = a;
-            while k < b {
-                let e = (k + BEND_ITEM as u32).min(b);
-                items.push(ConstraintItem {
-                    distance: (0, 0),
-                    bend: (k, e),
-                });
-                k = e;
+            let (ps, count) = particles_of(k);
+            for &p in &ps[..count] {
+                let seen = &mut pair_of_particle[p as usize];
+                if more || (*seen != NO_PAIR && *seen != (lo, hi)) {
+                    corner[p as usize] = true;
+                }
+                *seen = (lo, hi);
             }
-            colours.push((first, items.len() as u32));
         }
-        let tail_distance = range_of(&distance_rank, colours_kept);
-        let tail_bend = range_of(&bend_rank, colours_kept);
-        let has_tail = tail_distance.0 < tail_distance.1 || tail_bend.0 < tail_bend.1;
-        if has_tail {
-            let first = items.len() as u32;
-            items.push(ConstraintItem {
-                distance: tail_distance,
-                bend: tail_bend,
+        // Members of each block, of each seam (by pair) and of the corners, in the mesh's order
+        // (distance constraints, then bending stencils, offset by the distance count).
+        let mut block_members = vec![Vec::new(); blocks];
+        let mut seam_members: std::collections::BTreeMap<(u32, u32), Vec<u32>> =
+            std::collections::BTreeMap::new();
+        let mut corner_members = Vec::new();
+        for k in 0..total as u32 {
+            let (lo, hi, more) = blocks_of(k);
+            let (ps, count) = particles_of(k);
+            if lo == hi {
+                block_members[lo as usize].push(k);
+            } else if more || ps[..count].iter().any(|&p| corner[p as usize]) {
+                corner_members.push(k);
+            } else {
+                seam_members.entry((lo, hi)).or_default().push(k);
+            }
+        }
+        // Corner constraints fall into small independent clusters (union–find over shared
+        // particles); each cluster is an item.
+        let mut parent: Vec<u32> = (0..n as u32).collect();
+        fn root(parent: &mut [u32], mut p: u32) -> u32 {
+            while parent[p as usize] != p {
+                let up = parent[parent[p as usize] as usize];
+                parent[p as usize] = up;
+                p = up;
+            }
+            p
+        }
+        for &k in &corner_members {
+            let (ps, count) = particles_of(k);
+            for &p in &ps[1..count] {
+                let (a, b) = (root(&mut parent, ps[0]), root(&mut parent, p));
+                if a != b {
+                    parent[a.max(b) as usize] = a.min(b);
+                }
+            }
+        }
+        let mut clusters: std::collections::BTreeMap<u32, Vec<u32>> =
+            std::collections::BTreeMap::new();
+        for &k in &corner_members {
+            let r = root(&mut parent, particles_of(k).0[0]);
+            clusters.entry(r).or_default().push(k);
+        }
+
+        // Items: every block, then the seams, then the corner clusters.
+        let mut item_members: Vec<Vec<u32>> = block_members;
+        let mut separator_levels = Vec::new();
+        for group in [
+            seam_members.into_values().collect::<Vec<_>>(),
+            clusters.into_values().collect(),
+        ] {
+            let first = item_members.len() as u32;
+            item_members.extend(group.into_iter().filter(|m| !m.is_empty()));
+            if item_members.len() as u32 > first {
+                separator_levels.push((first, item_members.len() as u32));
+            }
+        }
+
+        let free: Vec<bool> = order
+            .to_mesh
+            .iter()
+            .map(|&m| inverse_mass[m as usize] > 0.0)
+            .collect();
+        let mut used = vec![0u128; n];
+        let mut packer = Packer {
+            mask: vec![0; n + item_members.len()],
+        };
+        let mut set = Self {
+            bend_compliance: compliance.unwrap_or(0.0),
+            distance_count: distance.len(),
+            bend_count: bend.len(),
+            stretch,
+            separator_levels,
+            ..Self::default()
+        };
+        let kind_of = |k: u32| -> RunKind {
+            if k < bend_base {
+                RunKind::Distance
+            } else if bend[(k - bend_base) as usize].rest == [0.0; 3] {
+                RunKind::FlatBend
+            } else {
+                RunKind::CurvedBend
+            }
+        };
+        for (item, members) in item_members.iter().enumerate() {
+            let padding = (n + item) as u32;
+            // Greedy colouring over the item's free particles, distance constraints first
+            // (a colour's constraints share no free particle, so the order inside a colour
+            // does not change the result); colours past 127 share one last colour.
+            let mut colour_of = Vec::with_capacity(members.len());
+            for &k in members {
+                let (ps, count) = particles_of(k);
+                let mut mask = 0u128;
+                for &p in &ps[..count] {
+                    if free[p as usize] {
+                        mask |= used[p as usize];
+                    }
+                }
+                let colour = (!mask).trailing_zeros().min(127);
+                for &p in &ps[..count] {
+                    if free[p as usize] {
+                        used[p as usize] |= 1u128 << colour;
+                    }
+                }
+                colour_of.push(colour);
+            }
+            for &k in members {
+                let (ps, count) = particles_of(k);
+                for &p in &ps[..count] {
+                    used[p as usize] = 0;
+                }
+            }
+            // Runs: per colour, its distance constraints, then its bending stencils, flat ones
+            // first; a batch that holds a curved stencil is solved as curved (its flat lanes
+            // give the same result there), so a colour leaves at most one batch part empty.
+            let class = |k: u32| u8::from(k >= bend_base);
+            let mut sorted: Vec<(u32, u8, RunKind, u32)> = members
+                .iter()
+                .zip(&colour_of)
+                .map(|(&k, &colour)| (colour, class(k), kind_of(k), k))
+                .collect();
+            sorted.sort_by_key(|&(colour, class, kind, _)| (colour, class, kind as u8));
+            let d0 = set.distance.len() as u32;
+            let r0 = set.runs.len() as u32;
+            let mut at = 0;
+            while at < sorted.len() {
+                let (colour, class, _, _) = sorted[at];
+                let mut end = at;
+                while end < sorted.len() && (sorted[end].0, sorted[end].1) == (colour, class) {
+                    end += 1;
+                }
+                let ids: Vec<u32> = sorted[at..end].iter().map(|e| e.3).collect();
+                at = end;
+                // A run is one colour: its batches share no free particle.
+                if class == 0 {
+                    let start = set.distance.len() as u32;
+                    for lanes in packer.pack(&ids, |k| {
+                        let c = &distance[k as usize];
+                        [c.i, c.j]
+                    }) {
+                        set.distance.push(distance_batch(&distance, lanes, padding));
+                    }
+                    set.runs.push(Run {
+                        kind: RunKind::Distance,
+                        batches: (start, set.distance.len() as u32),
+                    });
+                } else {
+                    let first_run = set.runs.len();
+                    for lanes in packer.pack(&ids, |k| bend[(k - bend_base) as usize].v) {
+                        let lanes = lanes.map(|k| if k == NONE { NONE } else { k - bend_base });
+                        let batch = bend_batch(&bend, lanes, padding);
+                        let kind = if batch.rest.iter().flatten().any(|&r| r != 0.0) {
+                            RunKind::CurvedBend
+                        } else {
+                            RunKind::FlatBend
+                        };
+                        let b = set.bend.len() as u32;
+                        set.bend.push(batch);
+                        let in_colour = set.runs.len() > first_run;
+                        match set.runs.last_mut() {
+                            Some(run) if in_colour && run.kind == kind && run.batches.1 == b => {
+                                run.batches.1 = b + 1;
+                            }
+                            _ => set.runs.push(Run {
+                                kind,
+                                batches: (b, b + 1),
+                            }),
+                        }
+                    }
+                }
+            }
+            set.items.push(ConstraintItem {
+                distance: (d0, set.distance.len() as u32),
+                runs: (r0, set.runs.len() as u32),
+                padding,
             });
-            colours.push((first, first + 1));
         }
-        Self {
-            distance: distance_sorted,
-            distance_is_shear: shear_sorted,
-            bend: bend_sorted,
-            items,
-            colours,
-            has_tail,
-        }
+        set
     }
 
-    /// Number of parallel colours (not counting the tail).
-    pub fn parallel_colours(&self) -> usize {
-        self.colours.len() - usize::from(self.has_tail)
+    /// Fills `distance[k]` and `bend[k]` with the inverse XPBD denominators of batch `k` for
+    /// substeps with `1/h² = inv_h2` (they change only with the substep length).
+    pub fn inverse_denominators(
+        &self,
+        inv_h2: f32,
+        distance: &mut Vec<[f32; LANES]>,
+        bend: &mut Vec<[f32; LANES]>,
+    ) {
+        distance.clear();
+        distance.extend(self.distance.iter().map(|c| {
+            std::array::from_fn(|l| 1.0 / (c.wi[l] + c.wj[l] + c.compliance[l] * inv_h2))
+        }));
+        let alpha = self.bend_compliance * inv_h2;
+        bend.clear();
+        bend.extend(
+            self.bend
+                .iter()
+                .map(|c| std::array::from_fn(|l| 1.0 / (c.wkk[l] + alpha))),
+        );
     }
+
+    /// Number of padding particles (one per item).
+    pub fn padding_particles(&self) -> usize {
+        self.items.len()
+    }
+
+    /// The vertices (solver numbering) of lane `lane` of distance batch `batch`.
+    pub fn distance_vertices(&self, lane_id: u32) -> [u32; 2] {
+        let b = &self.distance[lane_id as usize / LANES];
+        let l = lane_id as usize % LANES;
+        [b.i[l] / 16, b.j[l] / 16]
+    }
+}
+
+fn distance_batch(
+    constraints: &[DistanceConstraint],
+    lanes: [u32; LANES],
+    padding: u32,
+) -> DistanceBatch {
+    let mut b = DistanceBatch {
+        i: [offset(padding); LANES],
+        j: [offset(padding); LANES],
+        rest: [1.0; LANES],
+        // Empty lanes: a harmless non-zero denominator.
+        compliance: [1.0; LANES],
+        wi: [0.0; LANES],
+        wj: [0.0; LANES],
+    };
+    for (l, &k) in lanes.iter().enumerate() {
+        if k == NONE {
+            continue;
+        }
+        let c = &constraints[k as usize];
+        b.i[l] = offset(c.i);
+        b.j[l] = offset(c.j);
+        b.rest[l] = c.rest;
+        b.compliance[l] = c.compliance;
+        b.wi[l] = c.wi;
+        b.wj[l] = c.wj;
+    }
+    b
+}
+
+fn bend_batch(constraints: &[BendConstraint], lanes: [u32; LANES], padding: u32) -> BendBatch {
+    let mut b = BendBatch {
+        v: [[offset(padding); LANES]; 4],
+        k: [[0.0; LANES]; 3],
+        wk: [[0.0; LANES]; 4],
+        // Empty lanes: a harmless non-zero denominator.
+        wkk: [1.0; LANES],
+        rest: [[0.0; LANES]; 3],
+    };
+    for (l, &k) in lanes.iter().enumerate() {
+        if k == NONE {
+            continue;
+        }
+        let c = &constraints[k as usize];
+        let mut wkk = 0.0;
+        for q in 0..4 {
+            b.v[q][l] = offset(c.v[q]);
+            b.wk[q][l] = c.w[q] * c.k[q];
+            wkk += c.w[q] * c.k[q] * c.k[q];
+        }
+        for q in 0..3 {
+            b.k[q][l] = c.k[q + 1];
+            b.rest[q][l] = c.rest[q];
+        }
+        b.wkk[l] = wkk;
+    }
+    b
+}
+
+/// Greedy packing of constraints into batches whose lanes share no particle.
+struct Packer {
+    /// Per particle: the open batches (bits of window slots) that already hold it. All zero
+    /// between calls.
+    mask: Vec<u32>,
+}
+
+impl Packer {
+    /// Packs `ids` (in this order of preference) into batches; `particles(id)` lists a
+    /// constraint's particles. Each constraint goes into the oldest open batch that holds
+    /// none of its particles, or a new one; a full batch, or the oldest one when the window
+    /// is full, is emitted.
+    fn pack<const K: usize>(
+        &mut self,
+        ids: &[u32],
+        particles: impl Fn(u32) -> [u32; K],
+    ) -> Vec<[u32; LANES]> {
+        let mut out = Vec::with_capacity(ids.len().div_ceil(LANES));
+        let mut slots = [[NONE; LANES]; PACK_WINDOW];
+        let mut fill = [0usize; PACK_WINDOW];
+        let mut open: VecDeque<usize> = VecDeque::with_capacity(PACK_WINDOW);
+        let mut free: Vec<usize> = (0..PACK_WINDOW).rev().collect();
+        for &c in ids {
+            let ps = particles(c);
+            let taken = ps.iter().fold(0u32, |m, &p| m | self.mask[p as usize]);
+            let s = match open.iter().position(|&s| taken & (1 << s) == 0) {
+                Some(at) => open[at],
+                None => {
+                    if free.is_empty() {
+                        let oldest = open.pop_front().expect("a full window has open slots");
+                        close(
+                            oldest,
+                            &mut slots,
+                            &mut fill,
+                            &mut self.mask,
+                            &mut out,
+                            &particles,
+                        );
+                        free.push(oldest);
+                    }
+                    let s = free.pop().expect("a slot was just freed");
+                    open.push_back(s);
+                    s
+                }
+            };
+            slots[s][fill[s]] = c;
+            fill[s] += 1;
+            for p in ps {
+                self.mask[p as usize] |= 1 << s;
+            }
+            if fill[s] == LANES {
+                // Full: emit it now (`close` reads the slot before clearing it).
+                let at = open.iter().position(|&o| o == s).expect("s is open");
+                open.remove(at);
+                close(
+                    s,
+                    &mut slots,
+                    &mut fill,
+                    &mut self.mask,
+                    &mut out,
+                    &particles,
+                );
+                free.push(s);
+            }
+        }
+        while let Some(s) = open.pop_front() {
+            close(
+                s,
+                &mut slots,
+                &mut fill,
+                &mut self.mask,
+                &mut out,
+                &particles,
+            );
+        }
+        out
+    }
+}
+
+/// Emits the batch in window slot `s` and frees the slot.
+fn close<const K: usize>(
+    s: usize,
+    slots: &mut [[u32; LANES]; PACK_WINDOW],
+    fill: &mut [usize; PACK_WINDOW],
+    mask: &mut [u32],
+    out: &mut Vec<[u32; LANES]>,
+    particles: &impl Fn(u32) -> [u32; K],
+) {
+    for &c in &slots[s][..fill[s]] {
+        for p in particles(c) {
+            mask[p as usize] &= !(1u32 << s);
+        }
+    }
+    out.push(slots[s]);
+    slots[s] = [NONE; LANES];
+    fill[s] = 0;
 }
 
 fn cot(a: glam::Vec3, b: glam::Vec3) -> f32 {
@@ -255,12 +630,7 @@ fn cot(a: glam::Vec3, b: glam::Vec3) -> f32 {
     if cross < 1e-20 { 0.0 } else { a.dot(b) / cross }
 }
 
-fn bend_stencil(
-    rest: &[glam::Vec3],
-    v: [u32; 4],
-    w: [f32; 4],
-    compliance: f32,
-) -> Option<BendConstraint> {
+fn bend_stencil(rest: &[glam::Vec3], v: [u32; 4], w: [f32; 4]) -> Option<BendConstraint> {
     let [x0, x1, x2, x3] = v.map(|i| rest[i as usize]);
     let e0 = x1 - x0;
     let e1 = x2 - x0;
@@ -307,7 +677,6 @@ fn bend_stencil(
         k,
         w,
         rest: rest_value,
-        compliance,
     })
 }
 
@@ -326,97 +695,243 @@ fn stencil_frame(p0: Vec3A, p1: Vec3A, p2: Vec3A, p3: Vec3A) -> Option<(Vec3A, V
     Some((t, n, t.cross(n)))
 }
 
-/// Projects distance constraints `range` (XPBD). `first` means λ starts at zero.
+/// Projects the distance batches `batches` (XPBD); `inverse_denominator[k]` is
+/// `1 / (wᵢ + wⱼ + α̃)` of `batches[k]` ([`ConstraintSet::inverse_denominators`]) and
+/// `lambda[k]` its multipliers. `first` means λ starts at zero.
+///
+/// # Safety
+/// Every particle index of the batches is in bounds of `x`'s allocation, and the calling
+/// item has exclusive access to those particles in this phase.
 #[inline]
-pub(crate) fn solve_distance(
-    constraints: &[DistanceConstraint],
-    lambda: &SharedSlice<'_, f32>,
-    x: &SharedSlice<'_, Vec3A>,
-    range: (u32, u32),
+pub(crate) unsafe fn solve_distance(
+    isa: Isa,
+    batches: &[DistanceBatch],
+    inverse_denominator: &[[f32; LANES]],
+    lambda: Option<(&SharedSlice<'_, [f32; LANES]>, usize)>,
+    x: *mut Vec3A,
     inv_h2: f32,
-    keep_lambda: bool,
     first: bool,
 ) {
-    let (lo, hi) = (range.0 as usize, range.1 as usize);
-    for (k, c) in constraints.iter().enumerate().take(hi).skip(lo) {
-        // SAFETY: indices were validated at build time; the colouring gives this item
-        // exclusive access to particles i and j in this phase.
-        unsafe {
-            let pi = x.get(c.i as usize);
-            let pj = x.get(c.j as usize);
-            let d = pi - pj;
-            let len = d.length();
-            if len < 1e-9 {
-                continue;
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn avx(
+        batches: &[DistanceBatch],
+        inverse_denominator: &[[f32; LANES]],
+        lambda: Option<(&SharedSlice<'_, [f32; LANES]>, usize)>,
+        x: *mut Vec3A,
+        inv_h2: f32,
+        first: bool,
+    ) {
+        // SAFETY: the caller's contract.
+        unsafe { distance_kernel::<Avx8>(batches, inverse_denominator, lambda, x, inv_h2, first) }
+    }
+    // SAFETY: the caller's contract; AVX only where detected.
+    unsafe {
+        match isa {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx => avx(batches, inverse_denominator, lambda, x, inv_h2, first),
+            _ => {
+                distance_kernel::<Baseline8>(batches, inverse_denominator, lambda, x, inv_h2, first)
             }
-            let n = d / len;
-            let alpha = c.compliance * inv_h2;
-            let lam = if keep_lambda && !first {
-                lambda.get(k)
-            } else {
-                0.0
-            };
-            let dl = -(len - c.rest + alpha * lam) / (c.wi + c.wj + alpha);
-            if keep_lambda {
-                lambda.set(k, lam + dl);
-            }
-            x.set(c.i as usize, pi + (c.wi * dl) * n);
-            x.set(c.j as usize, pj - (c.wj * dl) * n);
         }
     }
 }
 
-/// Projects isometric bending constraints `range` (XPBD).
-#[inline]
-pub(crate) fn solve_bend(
-    constraints: &[BendConstraint],
-    lambda: &SharedSlice<'_, Vec3A>,
-    x: &SharedSlice<'_, Vec3A>,
-    range: (u32, u32),
+#[inline(always)]
+unsafe fn distance_kernel<L: Lanes>(
+    batches: &[DistanceBatch],
+    inverse_denominator: &[[f32; LANES]],
+    lambda: Option<(&SharedSlice<'_, [f32; LANES]>, usize)>,
+    x: *mut Vec3A,
     inv_h2: f32,
-    keep_lambda: bool,
     first: bool,
 ) {
-    let (lo, hi) = (range.0 as usize, range.1 as usize);
-    for (k, c) in constraints.iter().enumerate().take(hi).skip(lo) {
-        // SAFETY: as in `solve_distance`.
+    let inv_h2 = L::splat(inv_h2);
+    let tiny = L::splat(1e-9);
+    for (k, (c, inv)) in batches.iter().zip(inverse_denominator).enumerate() {
+        // SAFETY: see `solve_distance`.
         unsafe {
-            let p = [
-                x.get(c.v[0] as usize),
-                x.get(c.v[1] as usize),
-                x.get(c.v[2] as usize),
-                x.get(c.v[3] as usize),
-            ];
-            let mut value =
-                c.k[1] * (p[1] - p[0]) + c.k[2] * (p[2] - p[0]) + c.k[3] * (p[3] - p[0]);
-            if c.rest != [0.0; 3] {
-                let Some((t, n, b)) = stencil_frame(p[0], p[1], p[2], p[3]) else {
-                    continue;
-                };
-                value -= c.rest[0] * t + c.rest[1] * n + c.rest[2] * b;
+            let pi = L::gather(x, &c.i);
+            let pj = L::gather(x, &c.j);
+            let d = pi - pj;
+            let len = d.dot(d).sqrt();
+            // Degenerate (coincident) pairs are skipped; NaN goes through (the guard sees it).
+            let valid = len.not_lt(tiny);
+            let mut residual = len - L::load(&c.rest);
+            let mut lam = L::splat(0.0);
+            if let Some((lambda, base)) = lambda
+                && !first
+            {
+                lam = L::load(&lambda.get(base + k));
+                residual = residual + L::load(&c.compliance) * inv_h2 * lam;
             }
-            let alpha = c.compliance * inv_h2;
-            let denom = c.w[0] * c.k[0] * c.k[0]
-                + c.w[1] * c.k[1] * c.k[1]
-                + c.w[2] * c.k[2] * c.k[2]
-                + c.w[3] * c.k[3] * c.k[3]
-                + alpha;
-            let lam = if keep_lambda && !first {
-                lambda.get(k)
-            } else {
-                Vec3A::ZERO
+            let dl = -(residual * L::load(inv));
+            if let Some((lambda, base)) = lambda {
+                lambda.set(base + k, L::select(valid, lam + dl, lam).to_array());
+            }
+            let s = dl.div(len).and(valid);
+            L::scatter(x, &c.i, pi + d.scale(L::load(&c.wi) * s));
+            L::scatter(x, &c.j, pj - d.scale(L::load(&c.wj) * s));
+        }
+    }
+}
+
+/// Projects the bending batches `batches` (XPBD), all flat (`curved = false`: zero rest
+/// value) or all curved; `inverse_denominator[k]` is `1 / (Σ wᵢKᵢ² + α̃)` of `batches[k]` and
+/// `lambda[k]` its multipliers. `first` means λ starts at zero.
+///
+/// # Safety
+/// As [`solve_distance`].
+#[allow(clippy::too_many_arguments)]
+#[inline]
+pub(crate) unsafe fn solve_bend(
+    isa: Isa,
+    curved: bool,
+    batches: &[BendBatch],
+    inverse_denominator: &[[f32; LANES]],
+    lambda: Option<(&SharedSlice<'_, [[f32; LANES]; 3]>, usize)>,
+    x: *mut Vec3A,
+    alpha: f32,
+    first: bool,
+) {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn avx<const CURVED: bool>(
+        batches: &[BendBatch],
+        inverse_denominator: &[[f32; LANES]],
+        lambda: Option<(&SharedSlice<'_, [[f32; LANES]; 3]>, usize)>,
+        x: *mut Vec3A,
+        alpha: f32,
+        first: bool,
+    ) {
+        // SAFETY: the caller's contract.
+        unsafe {
+            bend_kernel::<Avx8, CURVED>(batches, inverse_denominator, lambda, x, alpha, first)
+        }
+    }
+    let args = (batches, inverse_denominator, lambda, x, alpha, first);
+    // SAFETY: the caller's contract; AVX only where detected.
+    unsafe {
+        match (isa, curved) {
+            #[cfg(target_arch = "x86_64")]
+            (Isa::Avx, false) => avx::<false>(args.0, args.1, args.2, args.3, args.4, args.5),
+            #[cfg(target_arch = "x86_64")]
+            (Isa::Avx, true) => avx::<true>(args.0, args.1, args.2, args.3, args.4, args.5),
+            (_, false) => {
+                bend_kernel::<Baseline8, false>(args.0, args.1, args.2, args.3, args.4, args.5)
+            }
+            (_, true) => {
+                bend_kernel::<Baseline8, true>(args.0, args.1, args.2, args.3, args.4, args.5)
+            }
+        }
+    }
+}
+
+#[inline(always)]
+unsafe fn bend_kernel<L: Lanes, const CURVED: bool>(
+    batches: &[BendBatch],
+    inverse_denominator: &[[f32; LANES]],
+    lambda: Option<(&SharedSlice<'_, [[f32; LANES]; 3]>, usize)>,
+    x: *mut Vec3A,
+    alpha: f32,
+    first: bool,
+) {
+    let alpha = L::splat(alpha);
+    for (k, (c, inv)) in batches.iter().zip(inverse_denominator).enumerate() {
+        // SAFETY: see `solve_bend`.
+        unsafe {
+            let p0 = L::gather(x, &c.v[0]);
+            let p1 = L::gather(x, &c.v[1]);
+            let p2 = L::gather(x, &c.v[2]);
+            let p3 = L::gather(x, &c.v[3]);
+            let e1 = p1 - p0;
+            let mut value = e1.scale(L::load(&c.k[0]))
+                + (p2 - p0).scale(L::load(&c.k[1]))
+                + (p3 - p0).scale(L::load(&c.k[2]));
+            let mut valid = None;
+            if CURVED {
+                // The stencil frame: edge t, mean normal n (e₁ × (x₂ − x₃) is the sum of the
+                // two triangles' area normals), binormal t × n.
+                let normal = e1.cross(p2 - p3);
+                let el = e1.dot(e1).sqrt();
+                let nl = normal.dot(normal).sqrt();
+                let framed = el.gt(L::splat(1e-12)).and(nl.gt(L::splat(1e-9) * el * el));
+                // One division for both lengths: 1/el = nl/(el·nl), 1/nl = el/(el·nl).
+                let inv_both = L::splat(1.0).div(el * nl);
+                let t = e1.scale(nl * inv_both);
+                let n = normal.scale(el * inv_both);
+                let b = t.cross(n);
+                let rest = V3::load(&c.rest);
+                let target = t.scale(rest.x) + n.scale(rest.y) + b.scale(rest.z);
+                value = value - target.and(framed);
+                // A flat lane (zero rest value) needs no frame: it is always solved.
+                let flat = rest.dot(rest).not_gt(L::splat(0.0));
+                valid = Some(framed.or(flat));
+            }
+            let mut lam = V3 {
+                x: L::splat(0.0),
+                y: L::splat(0.0),
+                z: L::splat(0.0),
             };
-            let dl = -(value + alpha * lam) / denom;
-            if keep_lambda {
-                lambda.set(k, lam + dl);
+            if let Some((lambda, base)) = lambda
+                && !first
+            {
+                lam = V3::load(&lambda.get(base + k));
+                value = value + lam.scale(alpha);
             }
-            for (q, &pq) in p.iter().enumerate() {
-                if c.w[q] > 0.0 {
-                    x.set(c.v[q] as usize, pq + (c.w[q] * c.k[q]) * dl);
+            let mut dl = value.scale(-L::load(inv));
+            if let Some(valid) = valid {
+                dl = dl.and(valid);
+            }
+            if let Some((lambda, base)) = lambda {
+                lambda.set(base + k, (lam + dl).to_arrays());
+            }
+            L::scatter(x, &c.v[0], p0 + dl.scale(L::load(&c.wk[0])));
+            L::scatter(x, &c.v[1], p1 + dl.scale(L::load(&c.wk[1])));
+            L::scatter(x, &c.v[2], p2 + dl.scale(L::load(&c.wk[2])));
+            L::scatter(x, &c.v[3], p3 + dl.scale(L::load(&c.wk[3])));
+        }
+    }
+}
+
+/// The largest squared length / rest length over `batches`, and its lane
+/// (`(first_batch + k) · LANES + lane`); NaN (and the first such lane) if any is NaN;
+/// `(0, u32::MAX)` if there is none.
+///
+/// # Safety
+/// Every particle index of the batches is in bounds of `x`'s allocation, and no thread
+/// writes those particles in this phase.
+#[inline]
+pub(crate) unsafe fn max_stretch_squared(
+    batches: &[DistanceBatch],
+    first_batch: usize,
+    x: *const Vec3A,
+) -> (f32, u32) {
+    let mut worst = (0.0f32, u32::MAX);
+    for (k, c) in batches.iter().enumerate() {
+        // SAFETY: see the function's contract.
+        let (pi, pj) = unsafe { (Baseline8::gather(x, &c.i), Baseline8::gather(x, &c.j)) };
+        let d = pi - pj;
+        let rest = Baseline8::load(&c.rest);
+        let ratio2 = d.dot(d).div(rest * rest);
+        let lane_id = |lane: u32| ((first_batch + k) * LANES) as u32 + lane;
+        let nan = ratio2.is_nan().bits();
+        if nan != 0 {
+            return (f32::NAN, lane_id(nan.trailing_zeros()));
+        }
+        let mut above = ratio2.gt(Baseline8::splat(worst.0)).bits();
+        if above != 0 {
+            let r = ratio2.to_array();
+            while above != 0 {
+                let lane = above.trailing_zeros();
+                above &= above - 1;
+                if r[lane as usize] > worst.0 {
+                    worst = (r[lane as usize], lane_id(lane));
                 }
             }
         }
     }
+    worst
 }
 
 #[cfg(test)]
@@ -425,54 +940,118 @@ mod tests {
     use crate::mesh::ClothMesh;
     use glam::Vec3;
 
-    #[test]
-    fn colours_never_share_a_free_particle() {
-        let mesh = ClothMesh::grid(Vec3::ZERO, Vec3::X, Vec3::Y, 24, 20).unwrap();
-        let topo = MeshTopology::new(&mesh);
-        let mut w = vec![1.0f32; mesh.vertex_count()];
-        w[0] = 0.0;
-        w[24] = 0.0;
-        let set = ConstraintSet::build(mesh.positions(), &topo, &Fabric::cotton(), &w);
-        assert!(set.parallel_colours() >= 8);
-        for (c, &(a, b)) in set.colours.iter().enumerate() {
-            if set.has_tail && c + 1 == set.colours.len() {
-                continue;
+    fn build(mesh: &ClothMesh, w: &[f32]) -> (ConstraintSet, ParticleOrder) {
+        let topo = MeshTopology::new(mesh);
+        let order = ParticleOrder::new(mesh.positions());
+        let set = ConstraintSet::build(mesh.positions(), &topo, &Fabric::cotton(), w, &order);
+        (set, order)
+    }
+
+    fn item_particles(set: &ConstraintSet, item: &ConstraintItem) -> Vec<u32> {
+        let mut v = Vec::new();
+        for run in &set.runs[item.runs.0 as usize..item.runs.1 as usize] {
+            let (a, b) = (run.batches.0 as usize, run.batches.1 as usize);
+            match run.kind {
+                RunKind::Distance => v.extend(
+                    set.distance[a..b]
+                        .iter()
+                        .flat_map(|c| c.i.into_iter().chain(c.j)),
+                ),
+                _ => v.extend(
+                    set.bend[a..b]
+                        .iter()
+                        .flat_map(|c| c.v.into_iter().flatten()),
+                ),
             }
-            let mut seen = vec![false; mesh.vertex_count()];
-            for item in &set.items[a as usize..b as usize] {
-                let d = &set.distance[item.distance.0 as usize..item.distance.1 as usize];
-                let bends = &set.bend[item.bend.0 as usize..item.bend.1 as usize];
-                let vertices = d
-                    .iter()
-                    .flat_map(|c| [c.i, c.j])
-                    .chain(bends.iter().flat_map(|c| c.v));
-                for v in vertices {
-                    if w[v as usize] > 0.0 {
-                        assert!(!seen[v as usize], "colour {c} reuses particle {v}");
-                        seen[v as usize] = true;
-                    }
+        }
+        v.retain(|&v| v != offset(item.padding));
+        v.iter().map(|o| o / 16).collect()
+    }
+
+    #[test]
+    fn parallel_items_and_batch_lanes_never_share_a_particle() {
+        let mesh = ClothMesh::cylinder(Vec3::ZERO, 0.3, 0.6, 48, 40).unwrap();
+        let mut w = vec![1.0f32; mesh.vertex_count()];
+        for v in ClothMesh::cylinder_ring(48, 40) {
+            w[v as usize] = 0.0;
+        }
+        let (set, order) = build(&mesh, &w);
+        assert!(order.blocks() >= 2);
+        let n = mesh.vertex_count();
+        // Lanes of a batch.
+        for b in &set.distance {
+            let mut v: Vec<u32> =
+                b.i.into_iter()
+                    .chain(b.j)
+                    .map(|o| o / 16)
+                    .filter(|&v| v < n as u32)
+                    .collect();
+            let len = v.len();
+            v.sort_unstable();
+            v.dedup();
+            assert_eq!(v.len(), len, "a distance batch repeats a particle");
+        }
+        for b in &set.bend {
+            let mut v: Vec<u32> =
+                b.v.into_iter()
+                    .flatten()
+                    .map(|o| o / 16)
+                    .filter(|&v| v < n as u32)
+                    .collect();
+            let len = v.len();
+            v.sort_unstable();
+            v.dedup();
+            assert_eq!(v.len(), len, "a bending batch repeats a particle");
+        }
+        // Items of one phase: the blocks, then the seams, then the corners.
+        let mut phases = vec![(0u32, order.blocks() as u32)];
+        phases.extend(set.separator_levels.iter().copied());
+        for (a, b) in phases {
+            let mut owner = vec![u32::MAX; n];
+            for k in a..b {
+                let item = &set.items[k as usize];
+                for v in item_particles(&set, item) {
+                    assert!(
+                        owner[v as usize] == u32::MAX || owner[v as usize] == k,
+                        "items {k} and {} share particle {v}",
+                        owner[v as usize]
+                    );
+                    owner[v as usize] = k;
                 }
             }
         }
-        let total: usize = set
-            .items
-            .iter()
-            .map(|i| (i.distance.1 - i.distance.0 + i.bend.1 - i.bend.0) as usize)
-            .sum();
-        assert_eq!(total, set.distance.len() + set.bend.len());
+        // Block items touch only their block's particles.
+        for k in 0..order.blocks() {
+            let range = order.block_start[k]..order.block_start[k + 1];
+            for v in item_particles(&set, &set.items[k]) {
+                assert!(range.contains(&v), "block {k} touches particle {v}");
+            }
+        }
+        // Every constraint is in exactly one lane.
+        let lanes = |v: &[u32]| v.iter().filter(|&&o| o / 16 < n as u32).count();
+        let distance: usize = set.distance.iter().map(|b| lanes(&b.i)).sum();
+        let bend: usize = set.bend.iter().map(|b| lanes(&b.v[0])).sum();
+        assert_eq!(distance, set.distance_count);
+        assert_eq!(bend, set.bend_count);
+        // Batches are nearly full.
+        assert!(set.distance.len() * LANES < set.distance_count * 11 / 10);
+        assert!(set.bend.len() * LANES < set.bend_count * 11 / 10);
     }
 
     #[test]
     fn flat_stencils_have_zero_rest_curvature_and_curved_ones_do_not() {
         let flat = ClothMesh::grid(Vec3::ZERO, Vec3::X, Vec3::Z, 4, 4).unwrap();
-        let topo = MeshTopology::new(&flat);
-        let w = vec![1.0; flat.vertex_count()];
-        let set = ConstraintSet::build(flat.positions(), &topo, &Fabric::cotton(), &w);
-        assert!(set.bend.iter().all(|b| b.rest == [0.0; 3]));
+        let (set, _) = build(&flat, &vec![1.0; flat.vertex_count()]);
+        assert!(set.bend_count > 0);
+        assert!(set.runs.iter().all(|r| r.kind != RunKind::CurvedBend));
         let tube = ClothMesh::cylinder(Vec3::ZERO, 0.2, 0.3, 16, 4).unwrap();
-        let topo = MeshTopology::new(&tube);
-        let w = vec![1.0; tube.vertex_count()];
-        let set = ConstraintSet::build(tube.positions(), &topo, &Fabric::cotton(), &w);
-        assert!(set.bend.iter().any(|b| b.rest != [0.0; 3]));
+        let (set, _) = build(&tube, &vec![1.0; tube.vertex_count()]);
+        assert!(set.runs.iter().any(|r| r.kind == RunKind::CurvedBend));
+        for run in set.runs.iter().filter(|r| r.kind != RunKind::Distance) {
+            for b in &set.bend[run.batches.0 as usize..run.batches.1 as usize] {
+                let curved = b.rest.iter().flatten().any(|&r| r != 0.0);
+                assert_eq!(curved, run.kind == RunKind::CurvedBend);
+            }
+        }
     }
 }

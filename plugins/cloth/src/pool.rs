@@ -1,17 +1,20 @@
 //! Worker threads and the phase scheduler that runs one step in parallel.
 //!
-//! A step is a fixed list of *phases* (predict, each constraint colour, collide, …); each
-//! phase is a fixed list of *items* (a range of particles or of constraints). Items of one
-//! phase write disjoint data (particles of one colour share no particle), so they may run in
-//! any order on any thread. Every thread — the caller's and the pool's workers — runs the
-//! same loop: wait until the previous phase is complete, then claim items of this phase from
-//! an atomic counter until none are left. Because the items and their contents do not depend
-//! on which thread runs them, the result is bit-for-bit the same for any number of threads.
+//! A step is a fixed list of *phases* (the blocks' work of a substep, the seams, the corners,
+//! …); each phase is a fixed list of *items* (a block, a seam, a range of triangles). Items of
+//! one phase write disjoint data, so they may run in any order on any thread. Every thread —
+//! the caller's and the pool's workers — runs the same loop: wait until the previous phase is
+//! complete, then claim items of this phase (one atomic flag each) until none are left. Each
+//! thread starts claiming at its own place in the list, so that it tends to get the same
+//! blocks in every substep and finds their particles and constraints in its cache. Because
+//! the items and their contents do not depend on which thread runs them, the result is
+//! bit-for-bit the same for any number of threads.
 //!
-//! A thread waits for a phase only while another thread is still inside one of its items, so
-//! a worker that the OS deschedules (the machine is shared) delays the step by at most one
-//! item. Waiting spins briefly and then yields. Between steps the workers sleep on a condition
-//! variable.
+//! A thread waits for a phase only while another thread is still inside one of its items.
+//! Waiting spins briefly and then yields. Between steps the workers spin for a few tens of
+//! microseconds (steps often follow each other closely) and then sleep on a condition
+//! variable; the solver wakes them at the start of a step (`WorkerPool::prewake`), so that
+//! their wake-up overlaps its serial preparations.
 //!
 //! The workers are persistent (spawning threads per step would cost tens of microseconds and
 //! allocate); the job they run borrows the solver's data for the duration of
@@ -20,11 +23,14 @@
 use std::cell::UnsafeCell;
 use std::marker::PhantomData;
 use std::panic::{AssertUnwindSafe, catch_unwind};
-use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU32, AtomicU64, AtomicUsize, Ordering};
 use std::sync::{Arc, Condvar, Mutex, MutexGuard};
 use std::thread::JoinHandle;
 
-type Job = dyn Fn() + Sync;
+type Job = dyn Fn(usize) + Sync;
+
+/// How long a thread spins for the next job, or for the workers to finish, before it blocks.
+const SPIN_TIME: std::time::Duration = std::time::Duration::from_micros(50);
 
 #[derive(Clone, Copy)]
 struct JobPtr(*const Job);
@@ -33,6 +39,8 @@ unsafe impl Send for JobPtr {}
 
 struct State {
     generation: u64,
+    /// Bumped by [`WorkerPool::prewake`]: sleeping workers wake up and spin for the next job.
+    alarm: u64,
     job: Option<JobPtr>,
     running: usize,
     shutdown: bool,
@@ -43,6 +51,10 @@ struct Shared {
     state: Mutex<State>,
     wake: Condvar,
     finished: Condvar,
+    /// Copies of `State::generation` and `State::running` that threads spin on before they
+    /// block on the condition variables.
+    generation_hint: AtomicU64,
+    running_hint: AtomicUsize,
 }
 
 impl Shared {
@@ -64,6 +76,7 @@ impl WorkerPool {
         let shared = Arc::new(Shared {
             state: Mutex::new(State {
                 generation: 0,
+                alarm: 0,
                 job: None,
                 running: 0,
                 shutdown: false,
@@ -71,13 +84,15 @@ impl WorkerPool {
             }),
             wake: Condvar::new(),
             finished: Condvar::new(),
+            generation_hint: AtomicU64::new(0),
+            running_hint: AtomicUsize::new(0),
         });
         let workers = (1..threads.max(1))
             .filter_map(|k| {
                 let shared = Arc::clone(&shared);
                 std::thread::Builder::new()
                     .name(format!("cloth-worker-{k}"))
-                    .spawn(move || worker_loop(&shared))
+                    .spawn(move || worker_loop(&shared, k))
                     .ok()
             })
             .collect();
@@ -89,28 +104,44 @@ impl WorkerPool {
         self.workers.len() + 1
     }
 
-    /// Runs `job` on every thread of the pool (the caller included) and returns when all of
-    /// them have returned from it.
-    pub fn run<'job>(&self, job: &(dyn Fn() + Sync + 'job)) {
+    /// Wakes sleeping workers ahead of the next [`Self::run`], so that waking them (tens of
+    /// microseconds) overlaps the caller's preparations.
+    pub fn prewake(&self) {
         if self.workers.is_empty() {
-            job();
             return;
         }
-        let ptr: *const (dyn Fn() + Sync + 'job) = job;
+        self.shared.lock().alarm += 1;
+        self.shared.wake.notify_all();
+    }
+
+    /// Runs `job(thread)` on every thread of the pool (the caller is thread 0, the workers
+    /// 1, 2, …) and returns when all of them have returned from it.
+    pub fn run<'job>(&self, job: &(dyn Fn(usize) + Sync + 'job)) {
+        if self.workers.is_empty() {
+            job(0);
+            return;
+        }
+        let ptr: *const (dyn Fn(usize) + Sync + 'job) = job;
         // SAFETY: only the lifetime is erased. `WaitForWorkers` below does not let this
         // function return (or unwind) before every worker has finished calling the job, so the
         // borrow outlives every use.
-        let ptr: *const (dyn Fn() + Sync + 'static) = unsafe { std::mem::transmute(ptr) };
+        let ptr: *const (dyn Fn(usize) + Sync + 'static) = unsafe { std::mem::transmute(ptr) };
         {
             let mut state = self.shared.lock();
             state.job = Some(JobPtr(ptr));
             state.generation = state.generation.wrapping_add(1);
             state.running = self.workers.len();
             state.panicked = false;
+            self.shared
+                .running_hint
+                .store(state.running, Ordering::Relaxed);
+            self.shared
+                .generation_hint
+                .store(state.generation, Ordering::Release);
         }
         self.shared.wake.notify_all();
         let wait = WaitForWorkers(&self.shared);
-        job();
+        job(0);
         drop(wait);
         if self.shared.lock().panicked {
             panic!("a cloth worker thread panicked during the step");
@@ -122,6 +153,8 @@ struct WaitForWorkers<'a>(&'a Shared);
 
 impl Drop for WaitForWorkers<'_> {
     fn drop(&mut self) {
+        // The workers usually finish within microseconds of the caller: spin first.
+        spin_until(|| self.0.running_hint.load(Ordering::Acquire) == 0);
         let mut state = self.0.lock();
         while state.running > 0 {
             state = self
@@ -144,23 +177,49 @@ impl Drop for WorkerPool {
     }
 }
 
-fn worker_loop(shared: &Shared) {
-    let mut seen = 0u64;
+/// Spins until `done()` or for about [`SPIN_TIME`], whichever comes first.
+fn spin_until(done: impl Fn() -> bool) -> bool {
+    let start = std::time::Instant::now();
     loop {
+        for _ in 0..64 {
+            if done() {
+                return true;
+            }
+            std::hint::spin_loop();
+        }
+        if start.elapsed() > SPIN_TIME {
+            return false;
+        }
+    }
+}
+
+fn worker_loop(shared: &Shared, thread: usize) {
+    let mut seen = 0u64;
+    let mut alarm = 0u64;
+    loop {
+        // Steps often follow each other closely (several cloths, or several steps per frame):
+        // spin a little before sleeping, so that the next step finds this worker awake.
+        spin_until(|| shared.generation_hint.load(Ordering::Acquire) != seen);
         let job = {
             let mut state = shared.lock();
-            while state.generation == seen && !state.shutdown {
+            while state.generation == seen && state.alarm == alarm && !state.shutdown {
                 state = shared.wake.wait(state).unwrap_or_else(|e| e.into_inner());
             }
             if state.shutdown {
                 return;
             }
+            if state.generation == seen {
+                // Woken ahead of a job: spin for it.
+                alarm = state.alarm;
+                continue;
+            }
+            alarm = state.alarm;
             seen = state.generation;
             state.job
         };
         let ok = match job {
             // SAFETY: `WorkerPool::run` keeps the job alive until `running` reaches zero.
-            Some(job) => catch_unwind(AssertUnwindSafe(|| unsafe { (*job.0)() })).is_ok(),
+            Some(job) => catch_unwind(AssertUnwindSafe(|| unsafe { (*job.0)(thread) })).is_ok(),
             None => true,
         };
         let mut state = shared.lock();
@@ -168,16 +227,24 @@ fn worker_loop(shared: &Shared) {
             state.panicked = true;
         }
         state.running -= 1;
+        shared.running_hint.store(state.running, Ordering::Release);
         if state.running == 0 {
             shared.finished.notify_all();
         }
     }
 }
 
-/// Per-phase claim and completion counters.
+/// A counter alone on its cache line, so that threads spinning on one phase's counter do not
+/// slow down the claims of another.
+#[repr(align(64))]
+struct Padded(AtomicU32);
+
+/// Per-item claim flags and per-phase completion counters.
 pub(crate) struct PhaseCounters {
-    claimed: Vec<AtomicU32>,
-    done: Vec<AtomicU32>,
+    /// One flag per item of every phase (`first[p]..first[p + 1]` for phase `p`).
+    claimed: Vec<AtomicBool>,
+    first: Vec<usize>,
+    done: Vec<Padded>,
     abort: AtomicBool,
 }
 
@@ -185,56 +252,92 @@ impl PhaseCounters {
     pub fn new() -> Self {
         Self {
             claimed: Vec::new(),
+            first: Vec::new(),
             done: Vec::new(),
             abort: AtomicBool::new(false),
         }
     }
 
-    /// Makes room for `phases` phases and zeroes the counters (single-threaded, before a run).
-    pub fn reset(&mut self, phases: usize) {
-        if self.claimed.len() < phases {
-            self.claimed.resize_with(phases, || AtomicU32::new(0));
-            self.done.resize_with(phases, || AtomicU32::new(0));
+    /// Makes room for the phases of `items` (item counts) and clears the flags and counters
+    /// (single-threaded, before a run).
+    pub fn reset(&mut self, items: &[u32]) {
+        self.first.clear();
+        self.first.push(0);
+        for &count in items {
+            let last = *self.first.last().expect("first holds 0");
+            self.first.push(last + count as usize);
         }
-        for c in &mut self.claimed[..phases] {
-            *c.get_mut() = 0;
+        let total = *self.first.last().expect("first holds 0");
+        if self.claimed.len() < total {
+            self.claimed.resize_with(total, || AtomicBool::new(false));
         }
-        for c in &mut self.done[..phases] {
-            *c.get_mut() = 0;
+        for c in &mut self.claimed[..total] {
+            *c.get_mut() = false;
+        }
+        if self.done.len() < items.len() {
+            self.done
+                .resize_with(items.len(), || Padded(AtomicU32::new(0)));
+        }
+        for c in &mut self.done[..items.len()] {
+            *c.0.get_mut() = 0;
         }
         *self.abort.get_mut() = false;
     }
 
     /// The loop every thread runs: phases in order, items claimed dynamically.
-    /// `items[p]` is the item count of phase `p`; `exec(p, k)` runs item `k` of phase `p`.
-    pub fn run_phases(&self, items: &[u32], exec: &(dyn Fn(usize, u32) + Sync)) {
+    /// `items[p]` is the item count of phase `p` (as given to [`Self::reset`]); `exec(p, k)`
+    /// runs item `k` of phase `p`. Thread `thread` of `threads` tries the items of a phase
+    /// from `thread · count / threads` on, so that each thread tends to get the same items
+    /// (the same blocks of particles, still in its cache) substep after substep, while the
+    /// items left over go to whichever thread is free.
+    ///
+    /// Returns how long this thread waited for other threads to finish phases.
+    pub fn run_phases(
+        &self,
+        thread: usize,
+        threads: usize,
+        items: &[u32],
+        exec: &(dyn Fn(usize, u32) + Sync),
+    ) -> std::time::Duration {
+        let mut waited = std::time::Duration::ZERO;
         for (p, &count) in items.iter().enumerate() {
-            if p > 0 {
+            if p > 0 && self.done[p - 1].0.load(Ordering::Acquire) < items[p - 1] {
                 let before = items[p - 1];
+                let start = std::time::Instant::now();
                 let mut spins = 0u32;
-                while self.done[p - 1].load(Ordering::Acquire) < before {
+                while self.done[p - 1].0.load(Ordering::Acquire) < before {
                     if self.abort.load(Ordering::Relaxed) {
-                        return;
+                        return waited + start.elapsed();
                     }
-                    if spins < 2_000 {
+                    if spins < 4_000 {
                         std::hint::spin_loop();
                         spins += 1;
                     } else {
                         std::thread::yield_now();
                     }
                 }
+                waited += start.elapsed();
             }
-            loop {
-                let k = self.claimed[p].fetch_add(1, Ordering::Relaxed);
-                if k >= count {
-                    break;
+            // Items this thread completed; published once, when no item is left to claim.
+            let mut completed = 0u32;
+            let flags = &self.claimed[self.first[p]..self.first[p + 1]];
+            let count = count as usize;
+            let start = thread * count / threads.max(1);
+            for k in (start..count).chain(0..start) {
+                let flag = &flags[k];
+                if flag.load(Ordering::Relaxed) || flag.swap(true, Ordering::Relaxed) {
+                    continue;
                 }
                 let guard = AbortOnUnwind(&self.abort);
-                exec(p, k);
+                exec(p, k as u32);
                 std::mem::forget(guard);
-                self.done[p].fetch_add(1, Ordering::Release);
+                completed += 1;
+            }
+            if completed > 0 {
+                self.done[p].0.fetch_add(completed, Ordering::Release);
             }
         }
+        waited
     }
 }
 
@@ -272,8 +375,10 @@ impl<'a, T: Copy> SharedSlice<'a, T> {
         }
     }
 
-    pub fn len(&self) -> usize {
-        self.len
+    /// The first element, for raw accesses under the same contract as [`Self::get`] and
+    /// [`Self::set`].
+    pub fn as_ptr(&self) -> *mut T {
+        self.ptr
     }
 
     /// # Safety
@@ -303,7 +408,7 @@ mod tests {
             let pool = WorkerPool::new(threads);
             let mut counters = PhaseCounters::new();
             let items = [7u32, 3, 11, 1, 5];
-            counters.reset(items.len());
+            counters.reset(&items);
             let mut log = vec![0u32; items.iter().sum::<u32>() as usize];
             let offsets: Vec<u32> = items
                 .iter()
@@ -320,7 +425,9 @@ mod tests {
                 let stamp = counter.fetch_add(1, Ordering::SeqCst) + 1;
                 unsafe { shared.set((offsets[p] + k) as usize, stamp + 1000 * p as u32) };
             };
-            pool.run(&|| counters.run_phases(&items, &exec));
+            pool.run(&|thread| {
+                counters.run_phases(thread, threads, &items, &exec);
+            });
             let mut last_max = 0;
             for (p, &n) in items.iter().enumerate() {
                 let stamps: Vec<u32> = (0..n)

@@ -18,11 +18,15 @@
 //! 3. **predict**: `v += h·(g + f_ext/m + fictitious)`, `v *= exp(−damping·h)`,
 //!    `x* = x + h·v`; attached particles move to their targets interpolated linearly across the
 //!    substeps between last frame's and this frame's targets;
-//! 4. **constraints**: stretch, shear and isometric bending, colour by colour, each colour's
-//!    items in parallel ([`crate::constraints`]);
+//! 4. **constraints**: stretch, shear and isometric bending, block by block in parallel, then
+//!    the constraints between blocks ([`crate::constraints`]);
 //! 5. **tethers** (Kim et al. 2012): a particle farther from an attachment than its rest
-//!    geodesic distance × `tether_scale` is put back on that sphere;
-//! 6. **collision** against the swept colliders and planes, with friction;
+//!    geodesic distance × `tether_scale` is put back on that sphere; with two tethers (the
+//!    default) it goes to the nearest point of the intersection of the two balls, computed in
+//!    closed form; with more, projections onto the balls alternate;
+//! 6. **collision** against the swept colliders and planes, with friction; each chunk of at
+//!    most 32 neighbouring particles ([`crate::order`]) is tested only against the
+//!    colliders whose swept bounds meet the chunk's bounds;
 //! 7. if a collision pushed a particle beyond its tether, the particle **slides** along the
 //!    collider's tangent plane to a point its tethers allow; if there is none, the **tether
 //!    wins** and the particle goes to the nearest collider surface (an inextensible garment
@@ -30,39 +34,61 @@
 //!    the velocity;
 //! 8. **velocity** `v = (x − x_prev)/h`.
 //!
-//! Steps 5–8 and the next substep's step 3 touch one particle at a time and run as one
-//! parallel pass. After the last substep a **blow-up guard** looks for non-finite positions or
-//! velocities, speeds above [`BlowUpGuard::max_speed_m_s`] and constraints stretched beyond
+//! Steps 5–8, the next substep's step 3 and the next substep's constraints inside each block
+//! touch only that block's particles and run as one parallel pass per block. After the last
+//! substep a **blow-up guard** looks for non-finite positions or velocities, speeds above
+//! [`BlowUpGuard::max_speed_m_s`] and constraints stretched beyond
 //! [`BlowUpGuard::max_stretch_ratio`], and reports it in the [`StepReport`]; the caller should
 //! then [`ClothSolver::reset_to`] the skinned pose.
 //!
 //! # Determinism and threads
 //!
-//! All work is split into items that do not depend on the thread count ([`crate::pool`]), so
-//! a step gives bit-for-bit the same result on 1, 2 or 4 threads. No memory is allocated
-//! during a step (the buffers grow only when the collider count or the substep count grows).
+//! All work is split into items that do not depend on the thread count ([`crate::pool`]):
+//! the blocks of [`crate::order`], the seams and corners of [`crate::constraints`], and fixed
+//! ranges of triangles. So a step gives bit-for-bit the same result on 1, 2 or 4 threads, and
+//! with or without AVX ([`crate::simd`]). The solver keeps its particles in the bisection
+//! order of [`crate::order`]; positions and velocities are written in the mesh's vertex order
+//! at the end of each step, inside the parallel pass (and read back only after
+//! [`ClothSolver::positions_mut`]). No memory is allocated during a step (the buffers grow
+//! only when the collider count or the substep count grows).
+//!
+//! A thread that the operating system deschedules while it holds an item stalls the others
+//! at the next synchronisation for the rest of its time slice (milliseconds). When a step's
+//! threads spent more than half of it waiting for each other, the next `SOLO_STEPS` steps
+//! (half a second) run on the caller's thread alone, which gives the same result; then the
+//! workers are tried again. On a machine shared with other busy processes this costs at most
+//! one slow step in 60.
+
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::time::Instant;
 
 use glam::{Vec3, Vec3A};
 
 use crate::collision::{MAX_COLLIDERS, Plane, Shape, Sphere, SweptCollider, collide_plane};
-use crate::constraints::{ConstraintSet, solve_bend, solve_distance};
+use crate::constraints::{ConstraintSet, RunKind, max_stretch_squared, solve_bend, solve_distance};
 use crate::error::{ClothError, non_negative, positive};
 use crate::fabric::Fabric;
 use crate::frame::{FrameInertia, FrameMotion, FrameState, RigidPose};
 use crate::mesh::{ClothMesh, MeshTopology};
+use crate::order::ParticleOrder;
 use crate::pool::{PhaseCounters, SharedSlice, WorkerPool};
-use crate::wind::{Wind, triangle_force};
+#[cfg(target_arch = "x86_64")]
+use crate::simd::Avx8;
+use crate::simd::{Baseline8, F4, Isa, LANES, LANES4, Lanes, V3, V4, gather4, offset, scatter4};
+use crate::wind::{Wind, triangle_force, triangle_force4};
 
-/// Particles per work item (also the chunk whose bounds select collider candidates).
-const PARTICLE_ITEM: usize = 64;
 /// Triangles per aerodynamics work item.
-const TRIANGLE_ITEM: usize = 512;
+const TRIANGLE_ITEM: usize = 1024;
 /// Alternations between the tethers of one particle.
 const TETHER_ROUNDS: usize = 6;
 /// Alternations between tethers and collider push-out when they conflict.
 const RECONCILE_ROUNDS: usize = 8;
-/// Distance constraints per stretch-check work item.
-const STRETCH_ITEM: usize = 2048;
+/// A parallel step whose threads waited for each other more than half the time, and more than
+/// this, was slowed down by the operating system descheduling a thread that held work.
+const STALL_MIN_NS: u64 = 1_000_000;
+/// Steps then run on the caller's thread alone before threads are tried again (half a second
+/// at 120 Hz).
+const SOLO_STEPS: u32 = 60;
 
 /// Thresholds of the blow-up guard.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -263,10 +289,18 @@ impl StepReport {
 }
 
 /// Static data of a cloth: masses, constraints, tethers, attachments.
+///
+/// Per-particle arrays are in the solver's order ([`ParticleOrder`]) unless they say mesh.
 struct Model {
+    order: ParticleOrder,
+    /// Mesh order (for the API).
+    inverse_mass_mesh: Vec<f32>,
+    /// Mesh order (for the API).
+    mass_mesh: Vec<f32>,
     inverse_mass: Vec<f32>,
-    mass: Vec<f32>,
+    /// Triangles (solver numbering).
     triangles: Vec<[u32; 3]>,
+    /// Triangles around each particle.
     vertex_triangles_start: Vec<u32>,
     vertex_triangles: Vec<u32>,
     constraints: ConstraintSet,
@@ -274,6 +308,7 @@ struct Model {
     tether_slot: Vec<u32>,
     tether_rest: Vec<f32>,
     tether_limit: Vec<f32>,
+    /// Attached mesh vertices, in the order of the targets.
     attached: Vec<u32>,
     attach_slot: Vec<u32>,
     fabric: Fabric,
@@ -283,23 +318,33 @@ struct Model {
 #[derive(Debug, Clone, Copy, Default)]
 struct ItemHealth {
     max_speed2: f32,
+    /// Mesh index.
     fastest: u32,
+    /// Smallest mesh index.
     first_non_finite: u32,
 }
 
 #[derive(Debug, Clone, Copy)]
 enum Phase {
     AeroTriangles,
-    AeroVertices,
-    /// Finish substep `sub - 1` (if `sub > 0`) and predict substep `sub` (if `sub < n`).
-    Particles {
+    /// Per block: finish substep `sub - 1` (if `sub > 0`), predict substep `sub`, solve the
+    /// block's constraints (first iteration). At `sub == 0` the block also reads the
+    /// positions from the mesh-ordered copy and gathers its aerodynamic forces.
+    Block {
         sub: u32,
     },
-    Colour {
-        colour: u32,
+    /// Per block: a further iteration of the block's constraints.
+    BlockIteration,
+    /// The seams or the corners (an index into `separator_levels`).
+    Separators {
+        level: u32,
         first: bool,
     },
-    Stretch,
+    /// Per block: finish the last substep, check health and stretch, write the mesh-ordered
+    /// copies.
+    Finish,
+    /// Stretch check of the seams' and corners' distance constraints.
+    SeparatorStretch,
 }
 
 /// Constants of one step.
@@ -309,9 +354,14 @@ struct StepConstants {
     h: f32,
     inv_h: f32,
     inv_h2: f32,
+    /// Bending compliance over h².
+    bend_alpha: f32,
     damping: f32,
     gravity: Vec3A,
     keep_lambda: bool,
+    aero: bool,
+    /// The constraint kernels' instruction set.
+    isa: Isa,
     thickness: f32,
     friction: f32,
     max_velocity: f32,
@@ -340,16 +390,30 @@ struct FrameTerms {
 /// A cloth and its XPBD solver. See the module documentation for the algorithm.
 pub struct ClothSolver {
     model: Model,
+    /// Positions in mesh order (the API's view; read at the start of a step, written at its
+    /// end).
     x: Vec<Vec3A>,
-    x_prev: Vec<Vec3A>,
+    /// Velocities in mesh order (written at the end of a step).
     v: Vec<Vec3A>,
+    /// Whether `x` may have been edited since the last step (then `xs` is read from it).
+    positions_edited: bool,
+    /// Positions in solver order, then one padding particle per constraint item.
+    xs: Vec<Vec3A>,
+    xs_prev: Vec<Vec3A>,
+    vs: Vec<Vec3A>,
     external: Vec<Vec3A>,
     external_dirty: bool,
     triangle_force: Vec<Vec3A>,
-    distance_lambda: Vec<f32>,
-    bend_lambda: Vec<Vec3A>,
+    distance_lambda: Vec<[f32; LANES]>,
+    bend_lambda: Vec<[[f32; LANES]; 3]>,
+    /// Inverse XPBD denominators per batch, for substeps with `1/h² = inverse_for_inv_h2`.
+    distance_inverse: Vec<[f32; LANES]>,
+    bend_inverse: Vec<[f32; LANES]>,
+    inverse_for_inv_h2: f32,
     target_start: Vec<Vec3A>,
     target_end: Vec<Vec3A>,
+    /// Attachment targets at the end of each substep of the current step.
+    anchors: Vec<Vec3A>,
     spheres_start: Vec<Sphere>,
     spheres_end: Vec<Sphere>,
     capsules: Vec<[u32; 2]>,
@@ -360,10 +424,14 @@ pub struct ClothSolver {
     wind: Option<Wind>,
     time: f64,
     pool: WorkerPool,
+    /// Steps left to run on the caller's thread alone (see `SOLO_STEPS`).
+    solo_steps: u32,
+    isa: Isa,
     counters: PhaseCounters,
     phases: Vec<Phase>,
     phase_items: Vec<u32>,
-    particle_health: Vec<ItemHealth>,
+    block_health: Vec<ItemHealth>,
+    /// Per constraint item: largest squared stretch ratio and its distance lane.
     stretch_health: Vec<(f32, u32)>,
 }
 
@@ -380,16 +448,15 @@ impl ClothSolver {
         fabric.validate()?;
         settings.validate()?;
         let n = mesh.vertex_count();
-        let mut attach_slot = vec![u32::MAX; n];
+        let mut attach_slot_mesh = vec![u32::MAX; n];
         for (index, &vertex) in attached.iter().enumerate() {
-            let slot =
-                attach_slot
-                    .get_mut(vertex as usize)
-                    .ok_or(ClothError::AttachmentOutOfRange {
-                        index,
-                        vertex,
-                        vertex_count: n,
-                    })?;
+            let slot = attach_slot_mesh.get_mut(vertex as usize).ok_or(
+                ClothError::AttachmentOutOfRange {
+                    index,
+                    vertex,
+                    vertex_count: n,
+                },
+            )?;
             if *slot != u32::MAX {
                 return Err(ClothError::DuplicateAttachment {
                     vertex,
@@ -400,9 +467,9 @@ impl ClothSolver {
             *slot = index as u32;
         }
         let mass = mesh.vertex_masses(fabric.areal_density_kg_m2);
-        let inverse_mass: Vec<f32> = mass
+        let inverse_mass_mesh: Vec<f32> = mass
             .iter()
-            .zip(&attach_slot)
+            .zip(&attach_slot_mesh)
             .map(|(&m, &slot)| {
                 if slot != u32::MAX || m <= 0.0 {
                     0.0
@@ -411,28 +478,62 @@ impl ClothSolver {
                 }
             })
             .collect();
+        let order = ParticleOrder::new(mesh.positions());
+        let to_mesh = &order.to_mesh;
         let topology = MeshTopology::new(mesh);
-        let constraints = ConstraintSet::build(mesh.positions(), &topology, &fabric, &inverse_mass);
+        let constraints = ConstraintSet::build(
+            mesh.positions(),
+            &topology,
+            &fabric,
+            &inverse_mass_mesh,
+            &order,
+        );
+        // Tethers, sorted by mesh vertex, regrouped per solver particle.
         let tethers = topology.tethers(n, attached, settings.tethers_per_particle);
-        let mut tether_start = vec![0u32; n + 1];
-        for t in &tethers {
-            tether_start[t.vertex as usize + 1] += 1;
+        let mut tethers_of = vec![0u32..0u32; n];
+        let mut k = 0;
+        while k < tethers.len() {
+            let v = tethers[k].vertex;
+            let first = k;
+            while k < tethers.len() && tethers[k].vertex == v {
+                k += 1;
+            }
+            tethers_of[v as usize] = first as u32..k as u32;
         }
-        for i in 0..n {
-            tether_start[i + 1] += tether_start[i];
+        let mut tether_start = Vec::with_capacity(n + 1);
+        let mut tether_slot = Vec::with_capacity(tethers.len());
+        let mut tether_rest = Vec::with_capacity(tethers.len());
+        tether_start.push(0u32);
+        for &m in to_mesh {
+            for t in
+                &tethers[tethers_of[m as usize].start as usize..tethers_of[m as usize].end as usize]
+            {
+                tether_slot.push(attach_slot_mesh[t.anchor as usize]);
+                tether_rest.push(t.rest_length);
+            }
+            tether_start.push(tether_slot.len() as u32);
         }
-        // `tethers` is sorted by vertex.
-        let tether_slot: Vec<u32> = tethers
-            .iter()
-            .map(|t| attach_slot[t.anchor as usize])
-            .collect();
-        let tether_rest: Vec<f32> = tethers.iter().map(|t| t.rest_length).collect();
         let tether_limit = tether_rest
             .iter()
             .map(|r| r * settings.tether_scale)
             .collect();
+        let inverse_mass: Vec<f32> = to_mesh
+            .iter()
+            .map(|&m| inverse_mass_mesh[m as usize])
+            .collect();
+        let attach_slot: Vec<u32> = to_mesh
+            .iter()
+            .map(|&m| attach_slot_mesh[m as usize])
+            .collect();
 
-        let triangles = mesh.triangles().to_vec();
+        // Triangles in the solver's numbering, ordered by their first particle, so that the
+        // triangles around a particle are near it in memory.
+        let mut triangles: Vec<[u32; 3]> = mesh
+            .triangles()
+            .iter()
+            .map(|t| t.map(|v| order.to_solver[v as usize]))
+            .collect();
+        triangles.sort_by_key(|t| (t.iter().min().copied(), *t));
         let mut vertex_triangles_start = vec![0u32; n + 1];
         for tri in &triangles {
             for &v in tri {
@@ -452,16 +553,20 @@ impl ClothSolver {
         }
 
         let x: Vec<Vec3A> = mesh.positions().iter().map(|&p| p.into()).collect();
+        let mut xs: Vec<Vec3A> = to_mesh.iter().map(|&m| x[m as usize]).collect();
+        xs.resize(n + constraints.padding_particles(), Vec3A::ZERO);
         let targets: Vec<Vec3A> = attached.iter().map(|&v| x[v as usize]).collect();
-        let particle_items = n.div_ceil(PARTICLE_ITEM);
-        let stretch_items = constraints.distance.len().div_ceil(STRETCH_ITEM);
-        let distance_count = constraints.distance.len();
-        let bend_count = constraints.bend.len();
         let keep_lambda = settings.iterations > 1;
+        let blocks = order.blocks();
+        let items = constraints.items.len();
+        let distance_batches = constraints.distance.len();
+        let bend_batches = constraints.bend.len();
         Ok(Self {
             model: Model {
+                order,
+                inverse_mass_mesh,
+                mass_mesh: mass,
                 inverse_mass,
-                mass,
                 triangles,
                 vertex_triangles_start,
                 vertex_triangles,
@@ -475,16 +580,23 @@ impl ClothSolver {
                 fabric,
                 settings,
             },
-            x_prev: x.clone(),
+            xs_prev: xs[..n].to_vec(),
+            xs,
+            vs: vec![Vec3A::ZERO; n],
             v: vec![Vec3A::ZERO; n],
+            positions_edited: false,
+            x,
             external: vec![Vec3A::ZERO; n],
             external_dirty: false,
             triangle_force: vec![Vec3A::ZERO; mesh.triangles().len()],
-            distance_lambda: vec![0.0; if keep_lambda { distance_count } else { 0 }],
-            bend_lambda: vec![Vec3A::ZERO; if keep_lambda { bend_count } else { 0 }],
-            x,
+            distance_lambda: vec![[0.0; LANES]; if keep_lambda { distance_batches } else { 0 }],
+            bend_lambda: vec![[[0.0; LANES]; 3]; if keep_lambda { bend_batches } else { 0 }],
+            distance_inverse: Vec::new(),
+            bend_inverse: Vec::new(),
+            inverse_for_inv_h2: f32::NAN,
             target_start: targets.clone(),
             target_end: targets,
+            anchors: Vec::new(),
             spheres_start: Vec::new(),
             spheres_end: Vec::new(),
             capsules: Vec::new(),
@@ -495,11 +607,13 @@ impl ClothSolver {
             wind: None,
             time: 0.0,
             pool: WorkerPool::new(settings.threads),
+            solo_steps: 0,
+            isa: Isa::detect(),
             counters: PhaseCounters::new(),
             phases: Vec::new(),
             phase_items: Vec::new(),
-            particle_health: vec![ItemHealth::default(); particle_items],
-            stretch_health: vec![(0.0, 0); stretch_items],
+            block_health: vec![ItemHealth::default(); blocks],
+            stretch_health: vec![(0.0, u32::MAX); items],
         })
     }
 
@@ -530,9 +644,9 @@ impl ClothSolver {
         }
         if settings.iterations > 1 {
             self.distance_lambda
-                .resize(self.model.constraints.distance.len(), 0.0);
+                .resize(self.model.constraints.distance.len(), [0.0; LANES]);
             self.bend_lambda
-                .resize(self.model.constraints.bend.len(), Vec3A::ZERO);
+                .resize(self.model.constraints.bend.len(), [[0.0; LANES]; 3]);
         }
         for (limit, rest) in self
             .model
@@ -551,7 +665,7 @@ impl ClothSolver {
         self.x.len()
     }
 
-    /// Particle positions (simulation frame, metres).
+    /// Particle positions (simulation frame, metres), in the mesh's vertex order.
     pub fn positions(&self) -> &[Vec3A] {
         &self.x
     }
@@ -559,6 +673,7 @@ impl ClothSolver {
     /// Writable particle positions, e.g. for a designer dragging a vertex. Velocities are
     /// unchanged; the edit takes effect at the next step.
     pub fn positions_mut(&mut self) -> &mut [Vec3A] {
+        self.positions_edited = true;
         &mut self.x
     }
 
@@ -569,12 +684,12 @@ impl ClothSolver {
 
     /// Particle masses, kg (attached particles keep their mass here; their inverse mass is 0).
     pub fn masses(&self) -> &[f32] {
-        &self.model.mass
+        &self.model.mass_mesh
     }
 
     /// Inverse masses, 1/kg (0 for attached particles).
     pub fn inverse_masses(&self) -> &[f32] {
-        &self.model.inverse_mass
+        &self.model.inverse_mass_mesh
     }
 
     /// The attached vertices, in the order of [`Self::set_attachment_targets`].
@@ -590,16 +705,18 @@ impl ClothSolver {
     /// Number of distance (stretch + shear) and bending constraints.
     pub fn constraint_counts(&self) -> (usize, usize) {
         (
-            self.model.constraints.distance.len(),
-            self.model.constraints.bend.len(),
+            self.model.constraints.distance_count,
+            self.model.constraints.bend_count,
         )
     }
 
-    /// Number of parallel colours, and whether there is a sequential tail batch.
+    /// Number of blocks whose constraints are solved in parallel, and whether there are
+    /// constraints between blocks (seams and corners, solved after the blocks); see
+    /// [`crate::constraints`].
     pub fn colour_count(&self) -> (usize, bool) {
         (
-            self.model.constraints.parallel_colours(),
-            self.model.constraints.has_tail,
+            self.model.order.blocks(),
+            !self.model.constraints.separator_levels.is_empty(),
         )
     }
 
@@ -757,14 +874,18 @@ impl ClothSolver {
                 index,
             });
         }
-        for ((x, xp), &p) in self.x.iter_mut().zip(&mut self.x_prev).zip(positions) {
+        for (x, &p) in self.x.iter_mut().zip(positions) {
             *x = p.into();
-            *xp = p.into();
+        }
+        for (i, &m) in self.model.order.to_mesh.iter().enumerate() {
+            self.xs[i] = self.x[m as usize];
+            self.xs_prev[i] = self.x[m as usize];
         }
         self.v.fill(Vec3A::ZERO);
+        self.vs.fill(Vec3A::ZERO);
         self.external.fill(Vec3A::ZERO);
-        self.distance_lambda.fill(0.0);
-        self.bend_lambda.fill(Vec3A::ZERO);
+        self.distance_lambda.fill([0.0; LANES]);
+        self.bend_lambda.fill([[0.0; LANES]; 3]);
         for (slot, &vertex) in self.model.attached.iter().enumerate() {
             self.target_start[slot] = self.x[vertex as usize];
             self.target_end[slot] = self.x[vertex as usize];
@@ -775,12 +896,11 @@ impl ClothSolver {
 
     /// Largest current length / rest length over the stretch constraints (not shear).
     pub fn max_stretch_ratio(&self) -> f32 {
-        let c = &self.model.constraints;
-        c.distance
+        self.model
+            .constraints
+            .stretch
             .iter()
-            .zip(&c.distance_is_shear)
-            .filter(|(_, shear)| !**shear)
-            .map(|(d, _)| (self.x[d.i as usize] - self.x[d.j as usize]).length() / d.rest)
+            .map(|&(i, j, rest)| (self.x[i as usize] - self.x[j as usize]).length() / rest)
             .fold(0.0, f32::max)
     }
 
@@ -789,10 +909,10 @@ impl ClothSolver {
     pub fn max_tether_ratio(&self) -> f32 {
         let m = &self.model;
         let mut worst = 0.0f32;
-        for i in 0..self.x.len() {
+        for (i, &vertex) in m.order.to_mesh.iter().enumerate() {
             for k in m.tether_start[i] as usize..m.tether_start[i + 1] as usize {
                 let anchor = m.attached[m.tether_slot[k] as usize] as usize;
-                let ratio = (self.x[i] - self.x[anchor]).length() / m.tether_rest[k];
+                let ratio = (self.x[vertex as usize] - self.x[anchor]).length() / m.tether_rest[k];
                 worst = worst.max(ratio);
             }
         }
@@ -803,8 +923,8 @@ impl ClothSolver {
     pub fn kinetic_energy(&self) -> f64 {
         self.v
             .iter()
-            .zip(&self.model.mass)
-            .zip(&self.model.inverse_mass)
+            .zip(&self.model.mass_mesh)
+            .zip(&self.model.inverse_mass_mesh)
             .filter(|(_, w)| **w > 0.0)
             .map(|((v, m), _)| 0.5 * *m as f64 * v.length_squared() as f64)
             .sum()
@@ -813,6 +933,9 @@ impl ClothSolver {
     /// Advances the simulation by `dt` seconds and reports the blow-up guard's verdict.
     pub fn step(&mut self, dt: f32) -> Result<StepReport, ClothError> {
         positive("time step (s)", dt)?;
+        if self.solo_steps == 0 {
+            self.pool.prewake();
+        }
         let settings = self.model.settings;
         let substeps = settings.substeps;
         let h = dt / substeps as f32;
@@ -832,14 +955,18 @@ impl ClothSolver {
             air_omega: Vec3A::from(m.angular_velocity * inertia.angular),
             motion: m,
         });
+        let inv_h2 = 1.0 / (h * h);
         let constants = StepConstants {
             substeps,
             h,
             inv_h: 1.0 / h,
-            inv_h2: 1.0 / (h * h),
+            inv_h2,
+            bend_alpha: self.model.constraints.bend_compliance * inv_h2,
             damping: (-fabric.damping_per_s * h).exp(),
             gravity: Vec3A::from(to_local * settings.gravity),
             keep_lambda: settings.iterations > 1,
+            aero,
+            isa: self.isa,
             thickness: settings.collision_thickness,
             friction: fabric.friction,
             max_velocity: settings.max_velocity_m_s.unwrap_or(f32::INFINITY),
@@ -851,71 +978,74 @@ impl ClothSolver {
             time: self.time as f32,
         };
         self.prepare_colliders(substeps, settings.collision_thickness);
+        if inv_h2.to_bits() != self.inverse_for_inv_h2.to_bits() {
+            self.model.constraints.inverse_denominators(
+                inv_h2,
+                &mut self.distance_inverse,
+                &mut self.bend_inverse,
+            );
+            self.inverse_for_inv_h2 = inv_h2;
+        }
+        self.anchors.clear();
+        for sub in 0..substeps {
+            let t1 = (sub + 1) as f32 / substeps as f32;
+            self.anchors.extend(
+                self.target_start
+                    .iter()
+                    .zip(&self.target_end)
+                    .map(|(a, b)| a.lerp(*b, t1)),
+            );
+        }
+        if self.positions_edited {
+            for (xs, &m) in self.xs.iter_mut().zip(&self.model.order.to_mesh) {
+                *xs = self.x[m as usize];
+            }
+            self.positions_edited = false;
+        }
         if !aero && self.external_dirty {
             self.external.fill(Vec3A::ZERO);
             self.external_dirty = false;
         }
 
         // The phase program of this step.
-        let n = self.x.len();
-        let particle_items = n.div_ceil(PARTICLE_ITEM) as u32;
+        let blocks = self.model.order.blocks() as u32;
+        let levels = &self.model.constraints.separator_levels;
         self.phases.clear();
         self.phase_items.clear();
-        let push = |phase: Phase, items: u32, phases: &mut Vec<Phase>, counts: &mut Vec<u32>| {
-            phases.push(phase);
-            counts.push(items);
+        let mut push = |phase: Phase, items: u32| {
+            self.phases.push(phase);
+            self.phase_items.push(items);
         };
         if aero {
             self.external_dirty = true;
             let tris = self.model.triangles.len().div_ceil(TRIANGLE_ITEM) as u32;
-            push(
-                Phase::AeroTriangles,
-                tris,
-                &mut self.phases,
-                &mut self.phase_items,
-            );
-            push(
-                Phase::AeroVertices,
-                particle_items,
-                &mut self.phases,
-                &mut self.phase_items,
-            );
+            push(Phase::AeroTriangles, tris);
         }
-        push(
-            Phase::Particles { sub: 0 },
-            particle_items,
-            &mut self.phases,
-            &mut self.phase_items,
-        );
         for sub in 0..substeps {
             for iteration in 0..settings.iterations {
-                for (colour, &(a, b)) in self.model.constraints.colours.iter().enumerate() {
+                if iteration == 0 {
+                    push(Phase::Block { sub }, blocks);
+                } else {
+                    push(Phase::BlockIteration, blocks);
+                }
+                for (level, &(a, b)) in levels.iter().enumerate() {
                     push(
-                        Phase::Colour {
-                            colour: colour as u32,
+                        Phase::Separators {
+                            level: level as u32,
                             first: iteration == 0,
                         },
                         b - a,
-                        &mut self.phases,
-                        &mut self.phase_items,
                     );
                 }
             }
-            push(
-                Phase::Particles { sub: sub + 1 },
-                particle_items,
-                &mut self.phases,
-                &mut self.phase_items,
-            );
         }
-        push(
-            Phase::Stretch,
-            self.stretch_health.len() as u32,
-            &mut self.phases,
-            &mut self.phase_items,
-        );
+        push(Phase::Finish, blocks);
+        let separators = self.model.constraints.items.len() as u32 - blocks;
+        if separators > 0 {
+            push(Phase::SeparatorStretch, separators);
+        }
 
-        self.counters.reset(self.phases.len());
+        self.counters.reset(&self.phase_items);
         {
             let context = StepContext {
                 model: &self.model,
@@ -924,22 +1054,44 @@ impl ClothSolver {
                 swept: &self.swept,
                 planes: &self.planes,
                 target_start: &self.target_start,
-                target_end: &self.target_end,
+                anchors: &self.anchors,
                 wind: self.wind.as_ref(),
                 x: SharedSlice::new(&mut self.x),
-                x_prev: SharedSlice::new(&mut self.x_prev),
                 v: SharedSlice::new(&mut self.v),
+                xs: SharedSlice::new(&mut self.xs),
+                xs_prev: SharedSlice::new(&mut self.xs_prev),
+                vs: SharedSlice::new(&mut self.vs),
                 external: SharedSlice::new(&mut self.external),
                 triangle_force: SharedSlice::new(&mut self.triangle_force),
                 distance_lambda: SharedSlice::new(&mut self.distance_lambda),
                 bend_lambda: SharedSlice::new(&mut self.bend_lambda),
-                particle_health: SharedSlice::new(&mut self.particle_health),
+                distance_inverse: &self.distance_inverse,
+                bend_inverse: &self.bend_inverse,
+                block_health: SharedSlice::new(&mut self.block_health),
                 stretch_health: SharedSlice::new(&mut self.stretch_health),
             };
             let counters = &self.counters;
             let items = &self.phase_items;
             let exec = |p: usize, k: u32| context.exec(p, k);
-            self.pool.run(&|| counters.run_phases(items, &exec));
+            let threads = self.pool.threads();
+            let job = |thread, threads| counters.run_phases(thread, threads, items, &exec);
+            if threads > 1 && self.solo_steps == 0 {
+                let waited = AtomicU64::new(0);
+                let start = Instant::now();
+                self.pool.run(&|thread| {
+                    let w = job(thread, threads).as_nanos() as u64;
+                    waited.fetch_max(w, Ordering::Relaxed);
+                });
+                let (waited, elapsed) = (waited.into_inner(), start.elapsed().as_nanos() as u64);
+                if waited > STALL_MIN_NS && 2 * waited > elapsed {
+                    // A thread was descheduled while holding an item (the machine is busy):
+                    // run the next steps on the caller's thread alone. The results are the same.
+                    self.solo_steps = SOLO_STEPS;
+                }
+            } else {
+                job(0, 1);
+                self.solo_steps = self.solo_steps.saturating_sub(1);
+            }
         }
 
         self.target_start.clone_from(&self.target_end);
@@ -952,21 +1104,25 @@ impl ClothSolver {
         let mut max_speed2 = 0.0f32;
         let mut fastest = 0u32;
         let mut non_finite = u32::MAX;
-        for h in &self.particle_health {
+        for h in &self.block_health {
             non_finite = non_finite.min(h.first_non_finite);
             if h.max_speed2 > max_speed2 {
                 max_speed2 = h.max_speed2;
                 fastest = h.fastest;
             }
         }
-        let mut max_ratio = 0.0f32;
+        let mut max_ratio2 = 0.0f32;
         let mut worst = u32::MAX;
-        for &(ratio, index) in &self.stretch_health {
-            if ratio.is_nan() || ratio > max_ratio {
-                max_ratio = ratio;
-                worst = index;
+        for &(ratio2, lane) in &self.stretch_health {
+            if ratio2.is_nan() || ratio2 > max_ratio2 {
+                max_ratio2 = ratio2;
+                worst = lane;
+                if ratio2.is_nan() {
+                    break;
+                }
             }
         }
+        let max_ratio = max_ratio2.sqrt();
         let guard = self.model.settings.guard;
         let max_speed = max_speed2.sqrt();
         let health = if non_finite != u32::MAX {
@@ -979,9 +1135,14 @@ impl ClothSolver {
                 speed_m_s: max_speed,
             })
         } else if (max_ratio.is_nan() || max_ratio > guard.max_stretch_ratio) && worst != u32::MAX {
-            let c = self.model.constraints.distance[worst as usize];
+            let to_mesh = &self.model.order.to_mesh;
+            let vertices = self
+                .model
+                .constraints
+                .distance_vertices(worst)
+                .map(|v| to_mesh[v as usize]);
             Health::BlownUp(BlowUp::Stretch {
-                vertices: [c.i, c.j],
+                vertices,
                 ratio: max_ratio,
             })
         } else {
@@ -1045,55 +1206,182 @@ struct StepContext<'a> {
     swept: &'a [SweptCollider],
     planes: &'a [Plane],
     target_start: &'a [Vec3A],
-    target_end: &'a [Vec3A],
+    /// Attachment targets at the end of each substep (`substep · attachments + slot`).
+    anchors: &'a [Vec3A],
     wind: Option<&'a Wind>,
+    /// Mesh order.
     x: SharedSlice<'a, Vec3A>,
-    x_prev: SharedSlice<'a, Vec3A>,
+    /// Mesh order.
     v: SharedSlice<'a, Vec3A>,
+    xs: SharedSlice<'a, Vec3A>,
+    xs_prev: SharedSlice<'a, Vec3A>,
+    vs: SharedSlice<'a, Vec3A>,
     external: SharedSlice<'a, Vec3A>,
     triangle_force: SharedSlice<'a, Vec3A>,
-    distance_lambda: SharedSlice<'a, f32>,
-    bend_lambda: SharedSlice<'a, Vec3A>,
-    particle_health: SharedSlice<'a, ItemHealth>,
+    distance_lambda: SharedSlice<'a, [f32; LANES]>,
+    bend_lambda: SharedSlice<'a, [[f32; LANES]; 3]>,
+    distance_inverse: &'a [[f32; LANES]],
+    bend_inverse: &'a [[f32; LANES]],
+    block_health: SharedSlice<'a, ItemHealth>,
     stretch_health: SharedSlice<'a, (f32, u32)>,
 }
 
 impl StepContext<'_> {
     fn exec(&self, phase: usize, item: u32) {
+        let item = item as usize;
         match self.phases[phase] {
-            Phase::AeroTriangles => self.aero_triangles(item as usize),
-            Phase::AeroVertices => self.aero_vertices(item as usize),
-            Phase::Particles { sub } => self.particles(sub, item as usize),
-            Phase::Colour { colour, first } => {
-                let c = &self.model.constraints;
-                let (a, _) = c.colours[colour as usize];
-                let work = c.items[(a + item) as usize];
-                solve_distance(
-                    &c.distance,
-                    &self.distance_lambda,
-                    &self.x,
-                    work.distance,
-                    self.k.inv_h2,
-                    self.k.keep_lambda,
-                    first,
-                );
-                solve_bend(
-                    &c.bend,
-                    &self.bend_lambda,
-                    &self.x,
-                    work.bend,
-                    self.k.inv_h2,
-                    self.k.keep_lambda,
-                    first,
-                );
+            Phase::AeroTriangles => self.aero_triangles(item),
+            Phase::Block { sub } => {
+                self.block_particles(sub, item);
+                self.solve(item, true);
             }
-            Phase::Stretch => self.stretch(item as usize),
+            Phase::BlockIteration => self.solve(item, false),
+            Phase::Separators { level, first } => {
+                let (a, _) = self.model.constraints.separator_levels[level as usize];
+                self.solve(a as usize + item, first);
+            }
+            Phase::Finish => self.finish_block(item),
+            Phase::SeparatorStretch => self.stretch(self.model.order.blocks() + item),
         }
     }
 
-    fn particle_range(&self, item: usize) -> std::ops::Range<usize> {
-        let lo = item * PARTICLE_ITEM;
-        lo..(lo + PARTICLE_ITEM).min(self.x.len())
+    /// Projects the constraints of item `item` once.
+    fn solve(&self, item: usize, first: bool) {
+        let c = &self.model.constraints;
+        let (r0, r1) = c.items[item].runs;
+        let keep = self.k.keep_lambda;
+        let x = self.xs.as_ptr();
+        for run in &c.runs[r0 as usize..r1 as usize] {
+            let (a, b) = (run.batches.0 as usize, run.batches.1 as usize);
+            // SAFETY: the constraint set was built for this particle count (padding
+            // included); items of one phase touch disjoint particles (see
+            // `crate::constraints`), and the lambdas of this item's batches belong to it.
+            unsafe {
+                match run.kind {
+                    RunKind::Distance => solve_distance(
+                        self.k.isa,
+                        &c.distance[a..b],
+                        &self.distance_inverse[a..b],
+                        keep.then_some((&self.distance_lambda, a)),
+                        x,
+                        self.k.inv_h2,
+                        first,
+                    ),
+                    RunKind::FlatBend => solve_bend(
+                        self.k.isa,
+                        false,
+                        &c.bend[a..b],
+                        &self.bend_inverse[a..b],
+                        keep.then_some((&self.bend_lambda, a)),
+                        x,
+                        self.k.bend_alpha,
+                        first,
+                    ),
+                    RunKind::CurvedBend => solve_bend(
+                        self.k.isa,
+                        true,
+                        &c.bend[a..b],
+                        &self.bend_inverse[a..b],
+                        keep.then_some((&self.bend_lambda, a)),
+                        x,
+                        self.k.bend_alpha,
+                        first,
+                    ),
+                }
+            }
+        }
+    }
+
+    /// The stretch check of item `item`'s distance constraints.
+    fn stretch(&self, item: usize) {
+        let c = &self.model.constraints;
+        let (d0, d1) = c.items[item].distance;
+        // SAFETY: positions are only read in this phase; slot `item` belongs to this item.
+        unsafe {
+            let worst = max_stretch_squared(
+                &c.distance[d0 as usize..d1 as usize],
+                d0 as usize,
+                self.xs.as_ptr(),
+            );
+            self.stretch_health.set(item, worst);
+        }
+    }
+
+    fn chunks(&self, block: usize) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
+        let o = &self.model.order;
+        (o.block_chunks[block] as usize..o.block_chunks[block + 1] as usize)
+            .map(|c| o.chunk_start[c] as usize..o.chunk_start[c + 1] as usize)
+    }
+
+    /// Finishes substep `sub - 1` (if `sub > 0`) and predicts substep `sub` for every chunk of
+    /// `block`; the first substep first reads the positions and the aerodynamic forces.
+    fn block_particles(&self, sub: u32, block: usize) {
+        for range in self.chunks(block) {
+            if sub == 0 {
+                self.load(range.clone());
+            }
+            self.particles(sub.checked_sub(1), Some(sub), range);
+        }
+    }
+
+    /// Finishes the last substep of `block`, checks its health and stretch, and writes its
+    /// positions and velocities in mesh order.
+    fn finish_block(&self, block: usize) {
+        for range in self.chunks(block) {
+            self.particles(Some(self.k.substeps - 1), None, range);
+        }
+        let o = &self.model.order;
+        let range = o.block_start[block] as usize..o.block_start[block + 1] as usize;
+        let mut h = ItemHealth {
+            max_speed2: 0.0,
+            fastest: 0,
+            first_non_finite: u32::MAX,
+        };
+        for i in range {
+            let m = o.to_mesh[i];
+            // SAFETY: particle `i` (mesh vertex `m`) belongs to this block.
+            let (p, vel) = unsafe {
+                let (p, vel) = (self.xs.get(i), self.vs.get(i));
+                self.x.set(m as usize, p);
+                self.v.set(m as usize, vel);
+                (p, vel)
+            };
+            if !p.is_finite() || !vel.is_finite() {
+                h.first_non_finite = h.first_non_finite.min(m);
+                continue;
+            }
+            let s2 = vel.length_squared();
+            if s2 > h.max_speed2 {
+                h.max_speed2 = s2;
+                h.fastest = m;
+            }
+        }
+        // SAFETY: slot `block` belongs to this item.
+        unsafe { self.block_health.set(block, h) };
+        self.stretch(block);
+    }
+
+    /// Reads the positions of `range` from the mesh-ordered copy and gathers their
+    /// aerodynamic forces.
+    fn load(&self, range: std::ops::Range<usize>) {
+        if !self.k.aero {
+            return;
+        }
+        let m = self.model;
+        for i in range {
+            let w = m.inverse_mass[i];
+            let mut sum = Vec3A::ZERO;
+            if w > 0.0 {
+                for &t in &m.vertex_triangles
+                    [m.vertex_triangles_start[i] as usize..m.vertex_triangles_start[i + 1] as usize]
+                {
+                    // SAFETY: the triangle forces are only read in this phase.
+                    sum += unsafe { self.triangle_force.get(t as usize) };
+                }
+            }
+            // SAFETY: particle `i` belongs to this item.
+            unsafe { self.external.set(i, sum * (w / 3.0)) };
+        }
     }
 
     fn aero_triangles(&self, item: usize) {
@@ -1101,16 +1389,50 @@ impl StepContext<'_> {
         let lo = item * TRIANGLE_ITEM;
         let hi = (lo + TRIANGLE_ITEM).min(tris.len());
         let k = &self.k;
-        for (t, tri) in tris.iter().enumerate().take(hi).skip(lo) {
-            // SAFETY: positions and velocities are only read in this phase; triangle `t`'s
-            // force slot belongs to this item.
+        let third = F4::splat(1.0 / 3.0);
+        let mut t = lo;
+        // Four triangles at a time.
+        while t + LANES4 <= hi {
+            let corner = |c: usize| -> [u32; LANES4] { std::array::from_fn(|l| tris[t + l][c]) };
+            let corners = [corner(0), corner(1), corner(2)];
+            // SAFETY: positions and velocities are only read in this phase; the force slots
+            // of triangles `t..t + 4` belong to this item.
             unsafe {
-                let p = tri.map(|v| self.x.get(v as usize));
-                let vel = (self.v.get(tri[0] as usize)
-                    + self.v.get(tri[1] as usize)
-                    + self.v.get(tri[2] as usize))
-                    / 3.0;
-                let centroid = (p[0] + p[1] + p[2]) / 3.0;
+                let p = corners.map(|c| gather4(self.xs.as_ptr(), &c));
+                let v = corners.map(|c| gather4(self.vs.as_ptr(), &c));
+                let mut relative = (v[0] + v[1] + v[2]).scale(third);
+                let centroid = (p[0] + p[1] + p[2]).scale(third);
+                if let Some(f) = &k.frame {
+                    relative = relative
+                        + V4::splat(f.air_velocity)
+                        + V4::splat(f.air_omega).cross(centroid);
+                }
+                if let Some(wind) = self.wind {
+                    let (pose, to_local) = match &k.frame {
+                        Some(f) => (f.motion.pose, f.motion.to_local),
+                        None => (RigidPose::IDENTITY, glam::Quat::IDENTITY),
+                    };
+                    let air = centroid.lanes().map(|c| {
+                        let world = pose.transform_point(Vec3::from(c));
+                        Vec3A::from(to_local * wind.velocity(world, k.time))
+                    });
+                    relative = relative - V4::from_lanes(air);
+                }
+                let force = triangle_force4(p, relative, k.air_density, k.drag, k.lift);
+                let index: [u32; LANES4] = std::array::from_fn(|l| (t + l) as u32);
+                scatter4(self.triangle_force.as_ptr(), &index, force);
+            }
+            t += LANES4;
+        }
+        for (t, tri) in tris.iter().enumerate().take(hi).skip(t) {
+            // SAFETY: as above, for triangle `t`.
+            unsafe {
+                let p = tri.map(|v| self.xs.get(v as usize));
+                let vel = (self.vs.get(tri[0] as usize)
+                    + self.vs.get(tri[1] as usize)
+                    + self.vs.get(tri[2] as usize))
+                    * (1.0 / 3.0);
+                let centroid = (p[0] + p[1] + p[2]) * (1.0 / 3.0);
                 let mut relative = vel;
                 let mut wind_world_point = Vec3::from(centroid);
                 let mut to_local = glam::Quat::IDENTITY;
@@ -1130,43 +1452,60 @@ impl StepContext<'_> {
         }
     }
 
-    fn aero_vertices(&self, item: usize) {
+    /// Where attachment `slot` is at the end of substep `sub`.
+    #[inline]
+    fn anchor(&self, slot: u32, sub: u32) -> Vec3A {
+        self.anchors[sub as usize * self.target_start.len() + slot as usize]
+    }
+
+    /// Puts particle `i` at `p` back within its tethers (see the module documentation).
+    #[inline]
+    fn apply_tethers(&self, i: usize, p: Vec3A, sub: u32) -> Vec3A {
         let m = self.model;
-        for i in self.particle_range(item) {
-            let w = m.inverse_mass[i];
-            let mut sum = Vec3A::ZERO;
-            if w > 0.0 {
-                for &t in &m.vertex_triangles
-                    [m.vertex_triangles_start[i] as usize..m.vertex_triangles_start[i + 1] as usize]
-                {
-                    // SAFETY: triangle forces are only read in this phase.
-                    sum += unsafe { self.triangle_force.get(t as usize) };
-                }
+        let first = m.tether_start[i] as usize;
+        if m.tether_start[i + 1] as usize - first == 2 {
+            let a0 = self.anchor(m.tether_slot[first], sub);
+            let a1 = self.anchor(m.tether_slot[first + 1], sub);
+            let (r0, r1) = (m.tether_limit[first], m.tether_limit[first + 1]);
+            if let Some(q) = project_on_two_balls(p, a0, r0, a1, r1) {
+                return q;
             }
-            // SAFETY: particle `i` belongs to this item.
-            unsafe { self.external.set(i, sum * (w / 3.0)) };
         }
+        self.alternate_tethers(i, p, sub)
     }
 
-    fn particles(&self, sub: u32, item: usize) {
-        let range = self.particle_range(item);
-        if sub > 0 {
-            self.finish_substep(sub - 1, range.clone());
-        }
-        if sub < self.k.substeps {
-            self.predict(sub, range);
-        } else {
-            self.health(item, range);
-        }
-    }
-
+    /// [`Self::apply_tethers`] for particles `i..i + 8`, which have two tethers each.
+    ///
+    /// # Safety
+    /// Particles `i..i + 8` belong to the calling item.
     #[inline]
-    fn anchor(&self, slot: u32, t: f32) -> Vec3A {
-        self.target_start[slot as usize].lerp(self.target_end[slot as usize], t)
+    unsafe fn tethers8(&self, i: usize, sub: u32) {
+        let m = self.model;
+        let s = m.tether_start[i] as usize;
+        let anchors = self.anchors[sub as usize * self.target_start.len()..].as_ptr();
+        let p = &mut [Vec3A::ZERO; LANES];
+        // SAFETY: slots index the attachments; `i..i + 8` belong to the calling item.
+        let mut fallback = unsafe {
+            two_tethers(
+                self.k.isa,
+                self.xs.as_ptr().add(i),
+                anchors,
+                &m.tether_slot[s..s + 2 * LANES],
+                &m.tether_limit[s..s + 2 * LANES],
+                p,
+            )
+        };
+        while fallback != 0 {
+            let l = fallback.trailing_zeros() as usize;
+            fallback &= fallback - 1;
+            // SAFETY: as above.
+            unsafe { self.xs.set(i + l, self.apply_tethers(i + l, p[l], sub)) };
+        }
     }
 
-    #[inline]
-    fn apply_tethers(&self, i: usize, mut p: Vec3A, t: f32) -> Vec3A {
+    /// Alternating projections onto the tether balls of particle `i`.
+    #[inline(never)]
+    fn alternate_tethers(&self, i: usize, mut p: Vec3A, sub: u32) -> Vec3A {
         let m = self.model;
         let tethers = m.tether_start[i] as usize..m.tether_start[i + 1] as usize;
         // Projecting onto one tether's sphere can violate another: alternate (it converges
@@ -1178,7 +1517,7 @@ impl StepContext<'_> {
             // make nearly equal balls, whose alternation converges slowly).
             let slack = if round == 0 { 1.0 } else { 1.0 + 2e-3 };
             for k in tethers.clone() {
-                let a = self.anchor(m.tether_slot[k], t);
+                let a = self.anchor(m.tether_slot[k], sub);
                 let d = p - a;
                 let limit = m.tether_limit[k];
                 let l2 = d.length_squared();
@@ -1195,128 +1534,238 @@ impl StepContext<'_> {
     }
 
     #[inline]
-    fn tether_violated(&self, i: usize, p: Vec3A, t: f32) -> bool {
+    fn tether_violated(&self, i: usize, p: Vec3A, sub: u32) -> bool {
         let m = self.model;
         (m.tether_start[i] as usize..m.tether_start[i + 1] as usize).any(|k| {
             let limit = m.tether_limit[k] * (1.0 + 1e-3);
-            (p - self.anchor(m.tether_slot[k], t)).length_squared() > limit * limit
+            (p - self.anchor(m.tether_slot[k], sub)).length_squared() > limit * limit
         })
     }
 
-    fn predict(&self, sub: u32, range: std::ops::Range<usize>) {
+    /// Finishes substep `finish` (tethers, collision, velocity) and then predicts substep
+    /// `predict` for the particles of `range` (a chunk).
+    fn particles(&self, finish: Option<u32>, predict: Option<u32>, range: std::ops::Range<usize>) {
         let k = &self.k;
         let m = self.model;
-        let t1 = (sub + 1) as f32 / k.substeps as f32;
-        for i in range {
-            // SAFETY: particle `i` belongs to this item; nothing else touches it in this phase.
-            unsafe {
-                let p = self.x.get(i);
-                if m.inverse_mass[i] == 0.0 {
-                    let target = self.anchor(m.attach_slot[i], t1);
-                    self.x_prev.set(i, p);
-                    self.x.set(i, target);
-                    self.v.set(i, (target - p) * k.inv_h);
-                    continue;
+        if let Some(sub) = finish {
+            self.tethers_and_collisions(sub, range.clone());
+        }
+        let fast = finish.is_some() && predict.is_some() && k.frame.is_none();
+        let mut i = range.start;
+        while i < range.end {
+            if fast
+                && i + LANES <= range.end
+                && m.inverse_mass[i..i + LANES].iter().all(|&w| w > 0.0)
+            {
+                // SAFETY: particles `i..i + 8` belong to this item.
+                unsafe {
+                    integrate_free(
+                        k.isa,
+                        [
+                            self.xs.as_ptr().add(i),
+                            self.xs_prev.as_ptr().add(i),
+                            self.vs.as_ptr().add(i),
+                        ],
+                        self.external.as_ptr().add(i),
+                        k,
+                    )
+                };
+                i += LANES;
+                continue;
+            }
+            let range = i..i + 1;
+            i += 1;
+            for i in range {
+                // SAFETY: particle `i` belongs to this item; nothing else touches it in this phase.
+                unsafe {
+                    let p = self.xs.get(i);
+                    if m.inverse_mass[i] == 0.0 {
+                        if let Some(sub) = predict {
+                            let target = self.anchor(m.attach_slot[i], sub);
+                            self.xs_prev.set(i, p);
+                            self.xs.set(i, target);
+                            self.vs.set(i, (target - p) * k.inv_h);
+                        }
+                        continue;
+                    }
+                    let mut vel = if finish.is_some() {
+                        let vel = (p - self.xs_prev.get(i)) * k.inv_h;
+                        let speed2 = vel.length_squared();
+                        if speed2 > k.max_velocity * k.max_velocity {
+                            vel * (k.max_velocity / speed2.sqrt())
+                        } else {
+                            vel
+                        }
+                    } else {
+                        self.vs.get(i)
+                    };
+                    if predict.is_some() {
+                        let mut a = k.gravity + self.external.get(i);
+                        if let Some(f) = &k.frame {
+                            a -= f.linear + f.euler.cross(p) + f.coriolis.cross(vel);
+                            a -= f.centrifugal * f.omega.cross(f.omega.cross(p));
+                        }
+                        vel = (vel + a * k.h) * k.damping;
+                        self.xs_prev.set(i, p);
+                        self.xs.set(i, p + vel * k.h);
+                    }
+                    self.vs.set(i, vel);
                 }
-                let mut vel = self.v.get(i);
-                let mut a = k.gravity + self.external.get(i);
-                if let Some(f) = &k.frame {
-                    a -= f.linear + f.euler.cross(p) + f.coriolis.cross(vel);
-                    a -= f.centrifugal * f.omega.cross(f.omega.cross(p));
-                }
-                vel = (vel + a * k.h) * k.damping;
-                self.x_prev.set(i, p);
-                self.x.set(i, p + vel * k.h);
             }
         }
     }
 
-    fn finish_substep(&self, sub: u32, range: std::ops::Range<usize>) {
+    /// Tethers, then collision with the colliders and planes near the chunk `range`.
+    fn tethers_and_collisions(&self, sub: u32, range: std::ops::Range<usize>) {
         let k = &self.k;
         let m = self.model;
-        let t1 = (sub + 1) as f32 / k.substeps as f32;
         let colliders = &self.swept[sub as usize * k.colliders..(sub as usize + 1) * k.colliders];
         let mut low = Vec3A::splat(f32::INFINITY);
         let mut high = Vec3A::splat(f32::NEG_INFINITY);
         // SAFETY (whole function): particles of `range` belong to this item; attachment
         // targets and colliders are read-only.
-        for i in range.clone() {
+        let mut i = range.start;
+        while i < range.end {
+            let two = |i: usize| m.tether_start[i + 1] - m.tether_start[i] == 2;
+            if i + LANES <= range.end && (i..i + LANES).all(two) {
+                // SAFETY: particles `i..i + 8` belong to this item.
+                unsafe { self.tethers8(i, sub) };
+                // The group's bounds as a tree (short dependency chains).
+                // SAFETY: as above.
+                let pairs: [(Vec3A, Vec3A); LANES] = std::array::from_fn(|l| unsafe {
+                    (self.xs.get(i + l), self.xs_prev.get(i + l))
+                });
+                let lo = pairs.map(|(p, q)| p.min(q));
+                let hi = pairs.map(|(p, q)| p.max(q));
+                let lo = [
+                    lo[0].min(lo[1]),
+                    lo[2].min(lo[3]),
+                    lo[4].min(lo[5]),
+                    lo[6].min(lo[7]),
+                ];
+                let hi = [
+                    hi[0].max(hi[1]),
+                    hi[2].max(hi[3]),
+                    hi[4].max(hi[5]),
+                    hi[6].max(hi[7]),
+                ];
+                low = low.min(lo[0].min(lo[1]).min(lo[2].min(lo[3])));
+                high = high.max(hi[0].max(hi[1]).max(hi[2].max(hi[3])));
+                i += LANES;
+                continue;
+            }
+            if m.inverse_mass[i] != 0.0 {
+                unsafe {
+                    let mut p = self.xs.get(i);
+                    if m.tether_start[i] != m.tether_start[i + 1] {
+                        p = self.apply_tethers(i, p, sub);
+                        self.xs.set(i, p);
+                    }
+                    let q = self.xs_prev.get(i);
+                    low = low.min(p).min(q);
+                    high = high.max(p).max(q);
+                }
+            }
+            i += 1;
+        }
+        // No free particle, or a NaN (the guard will see it): no collider, every plane, as
+        // the chunk's bounds say nothing.
+        let bounded = low.cmple(high).all();
+        // Colliders and planes whose bounds meet the chunk's (at most `NEAR` of each; more
+        // than that and every one is tested).
+        const NEAR: usize = 64;
+        let mut near = [0u16; NEAR];
+        let mut count = 0usize;
+        for (c, collider) in colliders.iter().enumerate() {
+            if bounded && collider.overlaps(low, high) {
+                if count < NEAR {
+                    near[count] = c as u16;
+                }
+                count += 1;
+            }
+        }
+        let all: [u16; 0] = [];
+        let (near, test_all) = if count > NEAR {
+            (&all[..], true)
+        } else {
+            (&near[..count], false)
+        };
+        let mut near_planes = [0u8; 8];
+        let mut plane_count = 0usize;
+        for (c, plane) in self.planes.iter().enumerate() {
+            let n = Vec3A::from(plane.normal);
+            // The chunk's lowest point along the normal.
+            let corner = Vec3A::select(n.cmpge(Vec3A::ZERO), low, high);
+            let clearance = n.dot(corner) - plane.offset - k.thickness;
+            if !bounded || clearance.is_nan() || clearance < 0.0 {
+                if plane_count < near_planes.len() {
+                    near_planes[plane_count] = c as u8;
+                }
+                plane_count += 1;
+            }
+        }
+        let all_planes = plane_count > near_planes.len();
+        let plane_count = plane_count.min(near_planes.len());
+        let shapes = if test_all {
+            colliders.len()
+        } else {
+            near.len()
+        } + if all_planes {
+            self.planes.len()
+        } else {
+            plane_count
+        };
+        if shapes == 0 {
+            return;
+        }
+        for i in range {
             if m.inverse_mass[i] == 0.0 {
                 continue;
             }
             unsafe {
-                let p = self.apply_tethers(i, self.x.get(i), t1);
-                self.x.set(i, p);
-                let q = self.x_prev.get(i);
-                low = low.min(p).min(q);
-                high = high.max(p).max(q);
-            }
-        }
-        let mut candidates = [0u16; MAX_COLLIDERS];
-        let mut count = 0usize;
-        if low.cmple(high).all() {
-            for (c, collider) in colliders.iter().enumerate() {
-                if collider.overlaps(low, high) {
-                    candidates[count] = c as u16;
-                    count += 1;
-                }
-            }
-        }
-        let candidates = &candidates[..count];
-        let shapes = count + self.planes.len();
-        if shapes > 0 {
-            for i in range.clone() {
-                if m.inverse_mass[i] == 0.0 {
-                    continue;
-                }
-                unsafe {
-                    let start = self.x_prev.get(i);
-                    let mut p = self.x.get(i);
-                    let mut touched = false;
-                    for _pass in 0..3 {
-                        let mut moved = false;
-                        let (seg_low, seg_high) = (start.min(p), start.max(p));
-                        for &c in candidates {
-                            let collider = &colliders[c as usize];
-                            if !collider.overlaps(seg_low, seg_high) {
-                                continue;
-                            }
+                let start = self.xs_prev.get(i);
+                let mut p = self.xs.get(i);
+                let mut touched = false;
+                for _pass in 0..3 {
+                    let mut moved = false;
+                    let (seg_low, seg_high) = (start.min(p), start.max(p));
+                    let mut test = |collider: &SweptCollider| {
+                        if collider.overlaps(seg_low, seg_high) {
                             let (q, hit) = collider.collide(start, p, k.thickness, k.friction);
                             if hit {
                                 p = q;
                                 moved = true;
                             }
                         }
-                        for plane in self.planes {
-                            let q = collide_plane(plane, start, p, k.thickness, k.friction);
-                            if q != p {
-                                p = q;
-                                moved = true;
-                            }
-                        }
-                        touched |= moved;
-                        if !moved || shapes < 2 {
-                            break;
-                        }
+                    };
+                    if test_all {
+                        colliders.iter().for_each(&mut test);
+                    } else {
+                        near.iter().for_each(|&c| test(&colliders[c as usize]));
                     }
-                    if touched && self.tether_violated(i, p, t1) {
-                        p = self.reconcile(i, start, p, t1, colliders);
+                    let mut test_plane = |plane: &Plane| {
+                        let q = collide_plane(plane, start, p, k.thickness, k.friction);
+                        if q != p {
+                            p = q;
+                            moved = true;
+                        }
+                    };
+                    if all_planes {
+                        self.planes.iter().for_each(&mut test_plane);
+                    } else {
+                        near_planes[..plane_count]
+                            .iter()
+                            .for_each(|&c| test_plane(&self.planes[c as usize]));
                     }
-                    self.x.set(i, p);
+                    touched |= moved;
+                    if !moved || shapes < 2 {
+                        break;
+                    }
                 }
-            }
-        }
-        for i in range {
-            if m.inverse_mass[i] == 0.0 {
-                continue;
-            }
-            unsafe {
-                let mut vel = (self.x.get(i) - self.x_prev.get(i)) * k.inv_h;
-                let speed2 = vel.length_squared();
-                if speed2 > k.max_velocity * k.max_velocity {
-                    vel *= k.max_velocity / speed2.sqrt();
+                if touched && self.tether_violated(i, p, sub) {
+                    p = self.reconcile(i, start, p, sub, colliders);
                 }
-                self.v.set(i, vel);
+                self.xs.set(i, p);
             }
         }
     }
@@ -1335,7 +1784,7 @@ impl StepContext<'_> {
         i: usize,
         start: Vec3A,
         collided: Vec3A,
-        t1: f32,
+        sub: u32,
         colliders: &[SweptCollider],
     ) -> Vec3A {
         let k = &self.k;
@@ -1363,7 +1812,7 @@ impl StepContext<'_> {
         let mut slid = false;
         if let Some((offset, n)) = support {
             for _round in 0..RECONCILE_ROUNDS {
-                p = self.apply_tethers(i, p, t1);
+                p = self.apply_tethers(i, p, sub);
                 let s = n.dot(p) - offset;
                 if s >= 0.0 {
                     slid = true;
@@ -1371,10 +1820,10 @@ impl StepContext<'_> {
                 }
                 p -= s * n;
             }
-            slid |= !self.tether_violated(i, p, t1);
+            slid |= !self.tether_violated(i, p, sub);
         }
         if !slid {
-            p = self.apply_tethers(i, collided, t1);
+            p = self.apply_tethers(i, collided, sub);
         }
         // Out of every collider (a slid particle is at most a rounding error inside).
         for _round in 0..2 {
@@ -1396,50 +1845,381 @@ impl StepContext<'_> {
             }
         }
         // SAFETY: particle `i` belongs to the calling item.
-        unsafe { self.x_prev.set(i, start + (p - collided)) };
+        unsafe { self.xs_prev.set(i, start + (p - collided)) };
         p
     }
+}
 
-    fn health(&self, item: usize, range: std::ops::Range<usize>) {
-        let mut h = ItemHealth {
-            max_speed2: 0.0,
-            fastest: 0,
-            first_non_finite: u32::MAX,
-        };
-        for i in range {
-            // SAFETY: particle `i` belongs to this item.
-            let (p, vel) = unsafe { (self.x.get(i), self.v.get(i)) };
-            if !p.is_finite() || !vel.is_finite() {
-                h.first_non_finite = h.first_non_finite.min(i as u32);
-                continue;
-            }
-            let s2 = vel.length_squared();
-            if s2 > h.max_speed2 {
-                h.max_speed2 = s2;
-                h.fastest = i as u32;
-            }
+/// The nearest point to `p` in the intersection of the balls `(a0, r0)` and `(a1, r1)`;
+/// `None` if they do not intersect (or nearly coincide with different radii in a way that
+/// rounding makes unreliable).
+///
+/// The nearest point is `p` itself, or its projection onto one ball if that lies in the
+/// other, or else on the circle where the two spheres meet, towards `p`.
+#[inline]
+fn project_on_two_balls(p: Vec3A, a0: Vec3A, r0: f32, a1: Vec3A, r1: f32) -> Option<Vec3A> {
+    let d0 = p - a0;
+    let d1 = p - a1;
+    let (l0, l1) = (d0.length_squared(), d1.length_squared());
+    if l0.is_nan() || l1.is_nan() {
+        // Let the alternating projections carry the NaN to the blow-up guard.
+        return None;
+    }
+    let (in0, in1) = (l0 <= r0 * r0, l1 <= r1 * r1);
+    if in0 && in1 {
+        return Some(p);
+    }
+    if !in0 {
+        let q = a0 + d0 * (r0 / l0.sqrt());
+        if (q - a1).length_squared() <= r1 * r1 {
+            return Some(q);
         }
-        // SAFETY: slot `item` belongs to this item.
-        unsafe { self.particle_health.set(item, h) };
+    }
+    if !in1 {
+        let q = a1 + d1 * (r1 / l1.sqrt());
+        if (q - a0).length_squared() <= r0 * r0 {
+            return Some(q);
+        }
+    }
+    // Both constraints are active: the circle where the spheres meet.
+    let axis = a1 - a0;
+    let length = axis.length();
+    if length <= 1e-9 * (r0 + r1) {
+        return None;
+    }
+    let u = axis / length;
+    let along = (length * length + r0 * r0 - r1 * r1) / (2.0 * length);
+    let radius2 = r0 * r0 - along * along;
+    if radius2.is_nan() || radius2 < 0.0 {
+        return None;
+    }
+    let across = d0 - d0.dot(u) * u;
+    let across_length = across.length();
+    let dir = if across_length > 1e-12 * r0 {
+        across / across_length
+    } else {
+        Vec3A::from(Vec3::from(u).any_orthonormal_vector())
+    };
+    Some(a0 + along * u + radius2.sqrt() * dir)
+}
+
+/// [`ClothSolver`]'s tethers for eight consecutive particles with two tethers each, at `x`
+/// (updated in place); `slots` and `limits` are their tethers' attachment slots and lengths
+/// (two per particle), `anchors` the attachments' positions. Lanes whose bit is set in the
+/// result need the scalar [`StepContext::apply_tethers`], from their positions left in
+/// `before` (NaN, degenerate balls, a point on the axis).
+///
+/// # Safety
+/// `x` points at eight particles that the calling item owns; the slots index `anchors`.
+#[inline]
+unsafe fn two_tethers(
+    isa: Isa,
+    x: *mut Vec3A,
+    anchors: *const Vec3A,
+    slots: &[u32],
+    limits: &[f32],
+    before: &mut [Vec3A; LANES],
+) -> u32 {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn avx(
+        x: *mut Vec3A,
+        anchors: *const Vec3A,
+        slots: &[u32],
+        limits: &[f32],
+        before: &mut [Vec3A; LANES],
+    ) -> u32 {
+        // SAFETY: the caller's contract.
+        unsafe { two_tethers_with::<Avx8>(x, anchors, slots, limits, before) }
+    }
+    // SAFETY: the caller's contract; AVX only where detected.
+    unsafe {
+        match isa {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx => avx(x, anchors, slots, limits, before),
+            _ => two_tethers_with::<Baseline8>(x, anchors, slots, limits, before),
+        }
+    }
+}
+
+#[inline(always)]
+unsafe fn two_tethers_with<L: Lanes>(
+    x: *mut Vec3A,
+    anchors: *const Vec3A,
+    slots: &[u32],
+    limits: &[f32],
+    before: &mut [Vec3A; LANES],
+) -> u32 {
+    let index: [u32; LANES] = std::array::from_fn(|l| offset(l as u32));
+    let slot0: [u32; LANES] = std::array::from_fn(|l| offset(slots[2 * l]));
+    let slot1: [u32; LANES] = std::array::from_fn(|l| offset(slots[2 * l + 1]));
+    let r0 = L::load(&std::array::from_fn(|l| limits[2 * l]));
+    let r1 = L::load(&std::array::from_fn(|l| limits[2 * l + 1]));
+    // SAFETY: the caller's contract.
+    unsafe {
+        let a0 = L::gather(anchors, &slot0);
+        let a1 = L::gather(anchors, &slot1);
+        let p = L::gather(x, &index);
+        let (q, fallback) = project_on_two_balls_lanes(p, a0, r0, a1, r1);
+        L::scatter(x, &index, q);
+        if fallback != 0 {
+            let (px, py, pz) = (p.x.to_array(), p.y.to_array(), p.z.to_array());
+            *before = std::array::from_fn(|l| Vec3A::new(px[l], py[l], pz[l]));
+        }
+        fallback
+    }
+}
+
+/// [`project_on_two_balls`] for eight points at once; lanes whose bit is set in the returned
+/// mask need the scalar function (NaN, degenerate balls, a point on the axis).
+#[inline(always)]
+fn project_on_two_balls_lanes<L: Lanes>(
+    p: V3<L>,
+    a0: V3<L>,
+    r0: L,
+    a1: V3<L>,
+    r1: L,
+) -> (V3<L>, u32) {
+    const ALL: u32 = (1 << LANES) - 1;
+    let d0 = p - a0;
+    let d1 = p - a1;
+    let (l0, l1) = (d0.dot(d0), d1.dot(d1));
+    let (r0r0, r1r1) = (r0 * r0, r1 * r1);
+    let in0 = l0.le(r0r0);
+    let in1 = l1.le(r1r1);
+    let inside = in0.and(in1);
+    if inside.bits() == ALL {
+        return (p, 0);
+    }
+    let nan = l0.is_nan().or(l1.is_nan()).bits();
+    let q0 = a0 + d0.scale(r0r0.div(l0).sqrt());
+    let e0 = q0 - a1;
+    let ok0 = e0.dot(e0).le(r1r1).and_not(in0);
+    let q1 = a1 + d1.scale(r1r1.div(l1).sqrt());
+    let e1 = q1 - a0;
+    let ok1 = e1.dot(e1).le(r0r0).and_not(in1);
+    let settled = inside.or(ok0).or(ok1);
+    let mut q = V3::select(ok0, q0, V3::select(ok1, q1, p));
+    let mut fallback = nan;
+    if settled.bits() != ALL {
+        // The circle where the spheres meet: centre a0 + along·û, radius √radius2.
+        let axis = a1 - a0;
+        let length2 = axis.dot(axis);
+        let inv_length2 = L::splat(1.0).div(length2);
+        let twice_along_length = length2 + r0r0 - r1r1;
+        let centre = a0 + axis.scale(L::splat(0.5) * twice_along_length * inv_length2);
+        let radius2 = r0r0 - L::splat(0.25) * twice_along_length * twice_along_length * inv_length2;
+        let across = d0 - axis.scale(d0.dot(axis) * inv_length2);
+        let across2 = across.dot(across);
+        let circle = centre + across.scale(radius2.div(across2).sqrt());
+        let tiny = L::splat(1e-9) * (r0 + r1);
+        let circle_ok = length2
+            .gt(tiny * tiny)
+            .and(radius2.not_lt(L::splat(0.0)).and_not(radius2.is_nan()))
+            .and(across2.gt(L::splat(1e-24) * r0r0));
+        q = V3::select(settled, q, circle);
+        fallback |= !circle_ok.or(settled).bits() & ALL;
+    }
+    (V3::select(inside, p, q), fallback)
+}
+
+/// The velocity of substep `s` and the prediction of substep `s + 1` for eight consecutive
+/// free particles in the simulation's inertial frame (no body frame): the vectorised form of
+/// [`StepContext::particles`]. `x` holds the positions, positions at the substep start and
+/// velocities of the first particle; `external` its external acceleration.
+///
+/// # Safety
+/// The eight particles belong to the calling item.
+#[inline]
+unsafe fn integrate_free(isa: Isa, x: [*mut Vec3A; 3], external: *const Vec3A, k: &StepConstants) {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn avx(x: [*mut Vec3A; 3], external: *const Vec3A, k: &StepConstants) {
+        // SAFETY: the caller's contract.
+        unsafe { integrate_free_with::<Avx8>(x, external, k) }
+    }
+    // SAFETY: the caller's contract; AVX only where detected.
+    unsafe {
+        match isa {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx => avx(x, external, k),
+            _ => integrate_free_with::<Baseline8>(x, external, k),
+        }
+    }
+}
+
+#[inline(always)]
+unsafe fn integrate_free_with<L: Lanes>(
+    [xs, xs_prev, vs]: [*mut Vec3A; 3],
+    external: *const Vec3A,
+    k: &StepConstants,
+) {
+    let lanes: [u32; LANES] = std::array::from_fn(|l| offset(l as u32));
+    let splat = |v: Vec3A| V3 {
+        x: L::splat(v.x),
+        y: L::splat(v.y),
+        z: L::splat(v.z),
+    };
+    // SAFETY: the caller's contract.
+    unsafe {
+        let p = L::gather(xs, &lanes);
+        let mut vel = (p - L::gather(xs_prev, &lanes)).scale(L::splat(k.inv_h));
+        let speed2 = vel.dot(vel);
+        let max = L::splat(k.max_velocity);
+        let fast = speed2.gt(max * max);
+        if fast.bits() != 0 {
+            vel = V3::select(fast, vel.scale(max.div(speed2.sqrt())), vel);
+        }
+        let a = splat(k.gravity) + L::gather(external, &lanes);
+        let vel = (vel + a.scale(L::splat(k.h))).scale(L::splat(k.damping));
+        L::scatter(xs_prev, &lanes, p);
+        L::scatter(xs, &lanes, p + vel.scale(L::splat(k.h)));
+        L::scatter(vs, &lanes, vel);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn random(seed: &mut u32) -> f32 {
+        *seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+        (*seed >> 8) as f32 / (1u32 << 24) as f32
     }
 
-    fn stretch(&self, item: usize) {
-        let d = &self.model.constraints.distance;
-        let lo = item * STRETCH_ITEM;
-        let hi = (lo + STRETCH_ITEM).min(d.len());
-        let mut worst = (0.0f32, u32::MAX);
-        for (k, c) in d.iter().enumerate().take(hi).skip(lo) {
-            // SAFETY: positions are only read in this phase.
-            let (a, b) = unsafe { (self.x.get(c.i as usize), self.x.get(c.j as usize)) };
-            let ratio = (a - b).length() / c.rest;
-            if ratio.is_nan() || ratio > worst.0 {
-                worst = (ratio, k as u32);
-                if ratio.is_nan() {
-                    break;
-                }
+    /// The nearest point of the intersection of two balls to `p`, by brute force: the best of
+    /// `p` (if inside), its projections onto each sphere (if inside the other) and points of
+    /// the circle where the spheres meet.
+    fn brute_force(p: Vec3A, a0: Vec3A, r0: f32, a1: Vec3A, r1: f32) -> Vec3A {
+        let inside = |q: Vec3A| (q - a0).length() <= r0 + 1e-5 && (q - a1).length() <= r1 + 1e-5;
+        let mut candidates = vec![
+            p,
+            a0 + (p - a0).normalize() * r0,
+            a1 + (p - a1).normalize() * r1,
+        ];
+        let axis = (a1 - a0).normalize();
+        let d = (a1 - a0).length();
+        let along = (d * d + r0 * r0 - r1 * r1) / (2.0 * d);
+        if r0 * r0 >= along * along {
+            let radius = (r0 * r0 - along * along).sqrt();
+            let u = Vec3A::from(Vec3::from(axis).any_orthonormal_vector());
+            let v = axis.cross(u);
+            for k in 0..20_000 {
+                let angle = k as f32 / 20_000.0 * std::f32::consts::TAU;
+                candidates.push(a0 + along * axis + radius * (angle.cos() * u + angle.sin() * v));
             }
         }
-        // SAFETY: slot `item` belongs to this item.
-        unsafe { self.stretch_health.set(item, worst) };
+        candidates
+            .into_iter()
+            .filter(|&q| inside(q))
+            .min_by(|a, b| (*a - p).length().total_cmp(&(*b - p).length()))
+            .expect("the balls intersect")
+    }
+
+    /// A point, two balls, and the projection of the point onto their intersection.
+    type Case = (Vec3A, Vec3A, f32, Vec3A, f32, Vec3A);
+
+    #[test]
+    fn two_tethers_project_onto_the_nearest_point_of_both_balls() {
+        let mut seed = 7u32;
+        let mut r = || random(&mut seed);
+        let mut points = Vec::new();
+        for _ in 0..64 {
+            let a0 = Vec3A::new(r(), r(), r()) * 0.2;
+            let a1 = a0 + Vec3A::new(r() - 0.5, r() - 0.5, r() - 0.5) * 0.1;
+            let (r0, r1) = (0.3 + 0.3 * r(), 0.3 + 0.3 * r());
+            let p = a0 + Vec3A::new(r() - 0.5, r() - 0.7, r() - 0.5) * 1.6;
+            let q = project_on_two_balls(p, a0, r0, a1, r1).expect("intersecting balls");
+            let expected = brute_force(p, a0, r0, a1, r1);
+            assert!(
+                (q - p).length() <= (expected - p).length() + 2e-4,
+                "{p}: {q} vs {expected}"
+            );
+            assert!(
+                (q - a0).length() <= r0 * (1.0 + 1e-5) && (q - a1).length() <= r1 * (1.0 + 1e-5)
+            );
+            points.push((p, a0, r0, a1, r1, q));
+        }
+        // Eight at a time, in lanes, give the same points.
+        for group in points.chunks(LANES) {
+            let lanes = |f: &dyn Fn(&Case) -> Vec3A| V3 {
+                x: Baseline8::load(&std::array::from_fn(|l| f(&group[l]).x)),
+                y: Baseline8::load(&std::array::from_fn(|l| f(&group[l]).y)),
+                z: Baseline8::load(&std::array::from_fn(|l| f(&group[l]).z)),
+            };
+            let scalars =
+                |f: &dyn Fn(&Case) -> f32| Baseline8::load(&std::array::from_fn(|l| f(&group[l])));
+            let (q, fallback) = project_on_two_balls_lanes(
+                lanes(&|g| g.0),
+                lanes(&|g| g.1),
+                scalars(&|g| g.2),
+                lanes(&|g| g.3),
+                scalars(&|g| g.4),
+            );
+            assert_eq!(fallback, 0);
+            let [x, y, z] = q.to_arrays();
+            for (l, g) in group.iter().enumerate() {
+                let q = Vec3A::new(x[l], y[l], z[l]);
+                assert!((q - g.5).length() < 1e-5, "lane {l}: {q} vs {}", g.5);
+            }
+        }
+    }
+
+    #[test]
+    fn the_baseline_and_avx_kernels_give_the_same_bits() {
+        if Isa::detect() != Isa::Avx {
+            return;
+        }
+        let run = |isa: Isa| {
+            let mesh = ClothMesh::cylinder(Vec3::new(0.0, 0.4, 0.0), 0.25, 0.6, 40, 30)
+                .expect("a valid skirt");
+            let top: Vec<u32> = ClothMesh::cylinder_ring(40, 30).collect();
+            let settings = SolverSettings {
+                threads: 2,
+                ..SolverSettings::default()
+            };
+            let mut cloth =
+                ClothSolver::new(&mesh, Fabric::cotton(), &top, settings).expect("a valid cloth");
+            cloth.isa = isa;
+            cloth.set_wind(Some(Wind::new(Vec3::new(1.0, 0.0, 0.5), 1.0, 0.3, 3)));
+            let legs = |t: f32| {
+                [
+                    Sphere::new(Vec3::new(-0.1, 0.95, 0.0), 0.12),
+                    Sphere::new(Vec3::new(-0.1, 0.5, 0.3 * t.sin()), 0.07),
+                    Sphere::new(Vec3::new(0.0, 1.0, 0.05), 0.15),
+                ]
+            };
+            for step in 0..40 {
+                cloth
+                    .set_colliders(&legs(step as f32 * 0.1), &[[0, 1]])
+                    .expect("valid colliders");
+                cloth.step(1.0 / 120.0).expect("a valid step");
+            }
+            cloth
+                .positions()
+                .iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        assert_eq!(run(Isa::Baseline), run(Isa::Avx));
+    }
+
+    #[test]
+    fn a_nan_position_stays_nan_through_the_tethers() {
+        let (a0, a1) = (Vec3A::ZERO, Vec3A::X * 0.05);
+        assert!(project_on_two_balls(Vec3A::NAN, a0, 0.5, a1, 0.5).is_none());
+        let nan = V3 {
+            x: Baseline8::splat(f32::NAN),
+            y: Baseline8::splat(0.0),
+            z: Baseline8::splat(0.0),
+        };
+        let splat = |v: Vec3A| V3 {
+            x: Baseline8::splat(v.x),
+            y: Baseline8::splat(v.y),
+            z: Baseline8::splat(v.z),
+        };
+        let r = Baseline8::splat(0.5);
+        let (_, fallback) = project_on_two_balls_lanes(nan, splat(a0), r, splat(a1), r);
+        assert_eq!(fallback, 0xFF);
     }
 }

@@ -21,6 +21,8 @@
 
 use glam::{Vec3, Vec3A};
 
+use crate::simd::{F4, V4};
+
 /// Number of noise samples per component (the gust pattern repeats after this many periods).
 const TABLE: usize = 256;
 
@@ -142,6 +144,45 @@ pub(crate) fn triangle_force(
     force
 }
 
+/// [`triangle_force`] for four triangles at once (one per lane).
+#[inline(always)]
+pub(crate) fn triangle_force4(
+    corners: [V4; 3],
+    relative_velocity: V4,
+    air_density: f32,
+    drag: f32,
+    lift: f32,
+) -> V4 {
+    let area_normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
+    let doubled_area = area_normal.dot(area_normal).sqrt();
+    let speed = relative_velocity.dot(relative_velocity).sqrt();
+    let valid = doubled_area
+        .not_lt(F4::splat(1e-12))
+        .and(speed.not_lt(F4::splat(1e-6)))
+        .and(speed.lt(F4::splat(f32::INFINITY)));
+    let one = F4::splat(1.0);
+    let n = area_normal.scale(one.div(doubled_area));
+    let u = relative_velocity.scale(one.div(speed));
+    let cos = u.dot(n);
+    // Orient n so that cos ≥ 0.
+    let sign = F4::select(cos.lt(F4::splat(0.0)), F4::splat(-1.0), one);
+    let n = n.scale(sign);
+    let cos = cos * sign;
+    let pressure =
+        F4::splat(0.5 * air_density) * speed * speed * (F4::splat(0.5) * doubled_area) * cos;
+    let mut force = u.scale(-(pressure * F4::splat(drag)));
+    if lift > 0.0 {
+        let across = n - u.scale(cos);
+        let len = across.dot(across).sqrt();
+        let sin = F4::max(one - cos * cos, F4::splat(0.0)).sqrt();
+        let amount = (pressure * F4::splat(lift) * sin)
+            .div(len)
+            .and(len.gt(F4::splat(1e-6)));
+        force = force - across.scale(amount);
+    }
+    force.and(valid)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -160,6 +201,47 @@ mod tests {
             assert!((a.velocity(x, t) - a.mean()).abs().max_element() <= 1.5 + 1e-5);
         }
         assert!(differs);
+    }
+
+    #[test]
+    fn four_lanes_agree_with_one() {
+        let corners = [
+            [Vec3A::ZERO, Vec3A::X, Vec3A::Y],
+            [
+                Vec3A::ZERO,
+                Vec3A::new(0.1, 0.0, 0.02),
+                Vec3A::new(0.0, 0.1, 0.05),
+            ],
+            [Vec3A::ZERO, Vec3A::X, 2.0 * Vec3A::X],
+            [
+                Vec3A::Z,
+                Vec3A::new(0.3, 0.2, 0.1),
+                Vec3A::new(-0.2, 0.4, 0.0),
+            ],
+        ];
+        let velocity = [
+            Vec3A::new(0.0, 0.0, 2.0),
+            Vec3A::new(1.0, -0.5, 0.3),
+            Vec3A::new(0.0, 0.0, 1.0),
+            Vec3A::new(0.0, 1e-7, 0.0),
+        ];
+        let lanes = |k: usize| V4::from_lanes(std::array::from_fn(|t| corners[t][k]));
+        let f = triangle_force4(
+            [lanes(0), lanes(1), lanes(2)],
+            V4::from_lanes(velocity),
+            1.2,
+            1.0,
+            0.4,
+        )
+        .lanes();
+        for t in 0..4 {
+            let one = triangle_force(corners[t], velocity[t], 1.2, 1.0, 0.4);
+            assert!(
+                (f[t] - one).length() <= 1e-6 * (1.0 + one.length()),
+                "{t}: {} vs {one}",
+                f[t]
+            );
+        }
     }
 
     #[test]
