@@ -1018,7 +1018,7 @@ impl Lanes for Scalar8 {
         }))
     }
     fn bits(self) -> u32 {
-        (0..LANES).map(|l| ((self.0[l].to_bits() >> 31) << l)).sum()
+        (0..LANES).map(|l| (self.0[l].to_bits() >> 31) << l).sum()
     }
     unsafe fn gather(x: *const Vec3A, offset: &[u32; LANES]) -> V3<Self> {
         let v = offset.map(|o| unsafe { *x.add((o / 16) as usize) });

@@ -86,11 +86,12 @@ pub struct GarmentSim {
 /// dragged (30 m/s at 120 Hz).
 const TELEPORT_M: f32 = 0.25;
 
-/// The skin offset kept over the body colliders, metres: they lie up to 1.5 cm inside the
-/// skin and up to 3 cm at the front of the thighs (so they never stick out of it; see
-/// [`fitroom_body::colliders`]), and cloth kept 3 mm
-/// over them would sink into the rendered skin.
-pub const BODY_SKIN_OFFSET_M: f32 = 0.020;
+/// The skin offset kept over the body colliders, metres (the 3 mm). The colliders
+/// lie up to 1.5 cm inside the skin (up to 3 cm at the front of the thighs) so that they never
+/// stick out of it (see [`fitroom_body::colliders`]); the skin therefore shows through a tight
+/// skirt in places. A larger offset hides that but stretches the skirt against the skinned
+/// bodice until the stretch guard fires (tried: 8 and 20 mm).
+pub const BODY_SKIN_OFFSET_M: f32 = 0.003;
 
 /// Smoothing passes of the garment's skin weights over its mesh.
 const SKIN_SMOOTHING: usize = 12;
