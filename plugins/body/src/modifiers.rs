@@ -193,6 +193,9 @@ fn check(field: &str, value: f32, min: f32, max: f32) -> Result<(), ShapeError> 
     Ok(())
 }
 
+/// Parses a target name into its slider's name and direction (`true` for `-incr`).
+type SliderTargets = fn(&str) -> Option<(&str, bool)>;
+
 /// The target name's region scale slider and direction: `legs/l-upperleg-scale-horiz-incr` ->
 /// (`upperleg-scale-horiz`, true); left and right targets share one (symmetric) slider.
 fn region_target(name: &str) -> Option<(&str, bool)> {
@@ -363,11 +366,16 @@ impl Shape {
             }
         }
 
-        if !self.measures.is_empty() {
-            for (name, &v) in &self.measures {
+        // Measure and region sliders: a decr/incr target pair per name.
+        let sliders: [(&BTreeMap<String, f32>, SliderTargets, bool); 2] = [
+            (&self.measures, measure_target, false),
+            (&self.regions, region_target, true),
+        ];
+        for (values, targets_of, is_region) in sliders {
+            for (name, &v) in values {
                 let mut found = false;
                 for (i, t) in model.targets.iter().enumerate() {
-                    if let Some((n, incr)) = measure_target(&t.name)
+                    if let Some((n, incr)) = targets_of(&t.name)
                         && n == name
                     {
                         found = true;
@@ -378,31 +386,18 @@ impl Shape {
                     }
                 }
                 if !found {
-                    return Err(ShapeError::UnknownModifier {
-                        name: name.clone(),
-                        known: Self::measure_names(model).join(", "),
+                    return Err(if is_region {
+                        ShapeError::UnknownRegion {
+                            name: name.clone(),
+                            known: Self::region_names(model).join(", "),
+                        }
+                    } else {
+                        ShapeError::UnknownModifier {
+                            name: name.clone(),
+                            known: Self::measure_names(model).join(", "),
+                        }
                     });
                 }
-            }
-        }
-        for (name, &v) in &self.regions {
-            let mut found = false;
-            for (i, t) in model.targets.iter().enumerate() {
-                if let Some((n, incr)) = region_target(&t.name)
-                    && n == name
-                {
-                    found = true;
-                    let w = if incr { v.max(0.0) } else { -v.min(0.0) };
-                    if w != 0.0 {
-                        out.push((i, w));
-                    }
-                }
-            }
-            if !found {
-                return Err(ShapeError::UnknownRegion {
-                    name: name.clone(),
-                    known: Self::region_names(model).join(", "),
-                });
             }
         }
         Ok(out)

@@ -2,22 +2,14 @@
 //! them), do not stick out of it, follow the body's shape, and the distance function agrees
 //! with an independent sampling of each round cone.
 
-use std::path::Path;
-use std::sync::OnceLock;
+mod common;
 
 use fitroom_body::colliders::{BodyColliders, ColliderOptions, round_cone_distance};
 use fitroom_body::{BodyModel, Shape};
 use glam::{Affine3A, Quat, Vec3};
 
 fn model() -> &'static BodyModel {
-    static MODEL: OnceLock<BodyModel> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let path = Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../assets/bodies/makehuman.fitbody"
-        ));
-        BodyModel::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-    })
+    common::asset_model()
 }
 
 /// Share of body vertices deeper than `depth` inside the colliders, and share within `near`

@@ -2,22 +2,16 @@
 //! model can make, honest reports of bodies it cannot, clear errors for bad input, and the
 //! issue's acceptance over ANSUR II subjects.
 
+mod common;
+
 use std::collections::BTreeMap;
-use std::path::{Path, PathBuf};
-use std::sync::OnceLock;
+use std::path::PathBuf;
 
 use fitroom_body::ansur::{self, ANSUR_MEASURES};
 use fitroom_body::{BodyModel, FitError, FitOptions, FitRequest, Measure, Shape, fit};
 
 fn model() -> &'static BodyModel {
-    static MODEL: OnceLock<BodyModel> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let path = Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../assets/bodies/makehuman.fitbody"
-        ));
-        BodyModel::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-    })
+    common::asset_model()
 }
 
 fn ansur_dir() -> PathBuf {

@@ -2,10 +2,10 @@
 //! analytic solids, the base mesh against MakeHuman's own values, sliders moving measurements
 //! the expected way, shape errors, and the time to shape a body.
 
+mod common;
+
 use std::collections::BTreeMap;
 use std::f32::consts::PI;
-use std::path::Path;
-use std::sync::OnceLock;
 use std::time::Instant;
 
 use fitroom_body::measure::{Plane, convex_hull, cross_section, hull_perimeter};
@@ -13,14 +13,7 @@ use fitroom_body::{BodyModel, Measurements, Shape, ShapeError};
 use glam::{Vec2, Vec3};
 
 fn model() -> &'static BodyModel {
-    static MODEL: OnceLock<BodyModel> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let path = Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../assets/bodies/makehuman.fitbody"
-        ));
-        BodyModel::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-    })
+    common::asset_model()
 }
 
 fn measure_shape(shape: &Shape) -> Measurements {

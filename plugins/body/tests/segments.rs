@@ -3,8 +3,9 @@
 //! grids, the body's segments, a waist-only girth edit on the MakeHuman body, and the roughness
 //! study of Figures 7.3-7.5 (`--nocapture` prints its table).
 
+mod common;
+
 use std::collections::{BTreeSet, VecDeque};
-use std::path::Path;
 use std::sync::OnceLock;
 
 use fitroom_body::BodyModel;
@@ -16,14 +17,7 @@ use fitroom_body::segments::{
 use glam::Vec3;
 
 fn model() -> &'static BodyModel {
-    static MODEL: OnceLock<BodyModel> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let path = Path::new(concat!(
-            env!("CARGO_MANIFEST_DIR"),
-            "/../../assets/bodies/makehuman.fitbody"
-        ));
-        BodyModel::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
-    })
+    common::asset_model()
 }
 
 fn segmentation() -> &'static BodySegmentation {

@@ -43,3 +43,15 @@ pub fn imported() -> &'static Imported {
 pub fn model() -> &'static BodyModel {
     &imported().model
 }
+
+/// The shipped body asset (`assets/bodies/makehuman.fitbody`), read once per test binary.
+pub fn asset_model() -> &'static BodyModel {
+    static MODEL: OnceLock<BodyModel> = OnceLock::new();
+    MODEL.get_or_init(|| {
+        let path = std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/../../assets/bodies/makehuman.fitbody"
+        ));
+        BodyModel::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+    })
+}
