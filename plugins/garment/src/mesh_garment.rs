@@ -57,7 +57,6 @@ fn mesh_error(file: &Path, problem: impl Into<String>) -> GarmentError {
 #[allow(clippy::too_many_arguments)]
 fn finish(
     file: &Path,
-    name: String,
     body: &BodySurface,
     fabric_name: &str,
     fabric: fitroom_cloth::Fabric,
@@ -66,8 +65,21 @@ fn finish(
     attached_mask: Vec<bool>,
     panels: Vec<String>,
     panel_of_vertex: Vec<u16>,
-    rest_2d: Vec<Vec2>,
+    uv_of: &HashMap<u32, Vec2>,
 ) -> Result<GarmentMesh, GarmentError> {
+    // The texture coordinates, when every vertex has one.
+    let n = positions.len();
+    let rest_2d: Vec<Vec2> = if uv_of.len() == n {
+        (0..n as u32)
+            .filter_map(|v| uv_of.get(&v).copied())
+            .collect()
+    } else {
+        Vec::new()
+    };
+    let name = file.file_stem().map_or_else(
+        || "garment".to_owned(),
+        |s| s.to_string_lossy().into_owned(),
+    );
     if triangles.is_empty() {
         return Err(mesh_error(file, "has no triangles"));
     }
@@ -254,18 +266,8 @@ pub fn load_obj(
             }
         }
     }
-    let rest_2d = if uv_of.len() == n {
-        (0..n as u32).map(|v| uv_of[&v]).collect()
-    } else {
-        Vec::new()
-    };
-    let name = path.file_stem().map_or_else(
-        || "garment".to_owned(),
-        |s| s.to_string_lossy().into_owned(),
-    );
     finish(
         path,
-        name,
         body,
         fabric_name,
         fabric,
@@ -277,7 +279,7 @@ pub fn load_obj(
             .into_iter()
             .map(|p| if p == u16::MAX { 0 } else { p })
             .collect(),
-        rest_2d,
+        &uv_of,
     )
 }
 
@@ -444,18 +446,8 @@ pub fn load_gltf(
     let attached = (0..n as u32)
         .map(|v| weight_of.get(&v).copied().unwrap_or(0.0) >= 0.5)
         .collect();
-    let rest_2d = if uv_of.len() == n {
-        (0..n as u32).map(|v| uv_of[&v]).collect()
-    } else {
-        Vec::new()
-    };
-    let name = path.file_stem().map_or_else(
-        || "garment".to_owned(),
-        |s| s.to_string_lossy().into_owned(),
-    );
     finish(
         path,
-        name,
         body,
         fabric_name,
         fabric,
@@ -466,7 +458,7 @@ pub fn load_gltf(
         (0..n as u32)
             .map(|v| panel_of.get(&v).copied().unwrap_or(0))
             .collect(),
-        rest_2d,
+        &uv_of,
     )
 }
 
