@@ -697,6 +697,7 @@ fn motion_eval(
             "{} with {} (seed {}), {} frames\n\
              position RMSE {:.1} mm (raw {:.1}); jitter {:.1} m/s² (raw {:.1}, clean {:.1}); lag {:.0} ms\n\
              bone-length std {:.1} mm (raw {:.1}); avatar foot skating {:.1}% -> {:.1}% of frame pairs\n\
+             the correction moves the ankles {:.1} mm on average (at most {:.1} mm)\n\
              joint-limit violations {}; frames rejected {}; pipeline {:.1} µs per frame",
             r.clip,
             r.filter,
@@ -712,6 +713,8 @@ fn motion_eval(
             r.input.bone_std_mm,
             100.0 * r.avatar_foot_skate_input,
             100.0 * r.avatar_foot_skate_output,
+            r.foot_correction_mean_mm,
+            r.foot_correction_max_mm,
             r.joint_limit_violations,
             r.rejected_frames,
             r.pipeline_us_per_frame

@@ -15,6 +15,7 @@ use fitroom_sensor::{
     bvh_source::{BvhSource, BvhSourceOptions},
     noise::{KinectNoiseModel, corrupt_stream},
 };
+use glam::Vec3;
 use serde::Serialize;
 
 use crate::{
@@ -114,6 +115,10 @@ pub struct EvalReport {
     /// correction) and of the full pipeline's output, measured on the avatar's soles.
     pub avatar_foot_skate_input: f32,
     pub avatar_foot_skate_output: f32,
+    /// How far the foot-skate correction moves the feet: mean and largest horizontal distance
+    /// (mm) of the output's ankles from the uncorrected (filtered, retargeted, limited) pose's.
+    pub foot_correction_mean_mm: f32,
+    pub foot_correction_max_mm: f32,
     /// Joint-limit violations (> 0.5°) in the output poses, summed over frames.
     pub joint_limit_violations: usize,
     /// Frames the gate rejected.
@@ -152,6 +157,10 @@ pub struct AvatarPipeline {
     limits: JointLimits,
     footskate: FootSkateCorrector,
     floor_y: f32,
+    feet: [Option<usize>; 2],
+    /// Horizontal distance (m) by which the foot-skate correction moved each ankle (left,
+    /// right) in the last [`AvatarPipeline::pose`].
+    pub last_foot_correction_m: [f32; 2],
 }
 
 impl AvatarPipeline {
@@ -165,6 +174,8 @@ impl AvatarPipeline {
             limits: JointLimits::new(skeleton, LimitOptions::default()),
             footskate: FootSkateCorrector::new(skeleton.clone(), FootSkateOptions::default())?,
             floor_y,
+            feet: [skeleton.index_of("foot_l"), skeleton.index_of("foot_r")],
+            last_foot_correction_m: [0.0; 2],
         })
     }
 
@@ -173,8 +184,17 @@ impl AvatarPipeline {
         let mut pose = self.retargeter.update(frame);
         let skeleton = self.retargeter.skeleton();
         self.limits.clamp_pose(skeleton, &mut pose);
+        let before = self
+            .feet
+            .map(|f| f.and_then(|i| pose.heads.get(i).copied()));
         self.footskate.correct(&mut pose, self.floor_y, dt);
         self.limits.clamp_pose(skeleton, &mut pose);
+        for (k, (foot, was)) in self.feet.iter().zip(before).enumerate() {
+            self.last_foot_correction_m[k] = match (foot.and_then(|i| pose.heads.get(i)), was) {
+                (Some(now), Some(was)) => Vec3::new(now.x - was.x, 0.0, now.z - was.z).length(),
+                _ => 0.0,
+            };
+        }
         pose
     }
 
@@ -245,6 +265,7 @@ pub fn evaluate_clip(
             ..RetargetOptions::default()
         },
     )?;
+    let (mut correction_sum, mut correction_max, mut correction_count) = (0.0f64, 0.0f32, 0usize);
 
     let mut clean = Vec::with_capacity(noisy.len());
     let mut kept_noisy = Vec::with_capacity(noisy.len());
@@ -267,6 +288,13 @@ pub fn evaluate_clip(
         let pose = pipeline.pose(&out, dt);
         busy_s += start.elapsed().as_secs_f64();
         raw_poses.push(raw_pipeline.update(frame));
+        for d in pipeline.last_foot_correction_m {
+            if d.is_finite() {
+                correction_sum += f64::from(d);
+                correction_max = correction_max.max(d);
+                correction_count += 1;
+            }
+        }
         clean.push(clean_all[shown].clone());
         kept_noisy.push(frame.clone());
         filtered.push(out);
@@ -289,6 +317,8 @@ pub fn evaluate_clip(
         input: metrics::evaluate(&clean, &kept_noisy, floor_y),
         avatar_foot_skate_input: skate_in,
         avatar_foot_skate_output: skate_out,
+        foot_correction_mean_mm: (1000.0 * correction_sum / correction_count.max(1) as f64) as f32,
+        foot_correction_max_mm: 1000.0 * correction_max,
         joint_limit_violations: violations,
         rejected_frames: gate.stats().rejected_total(),
         pipeline_us_per_frame: busy_s * 1e6 / noisy.len().max(1) as f64,

@@ -72,9 +72,17 @@
 //!   above its ground is never in contact, whatever its speed (the seed's rule would keep a
 //!   slowly raised foot pinned); a lock farther than [`FootSkateOptions::max_lock_distance_m`]
 //!   (horizontally) from the input foot is released (the user really moved the foot).
-//! * Floor penetration of a free foot is not corrected, and a free foot is never locked while
-//!   it moves fast near the floor: the retargeted swing foot of some clips glides a few
-//!   centimetres above the floor before it lands (16_11), which the measure below counts.
+//! * **Standing on the floor** ([`FootSkateOptions::stand_on_floor`]): the retargeter's root
+//!   height (the performer's hip height scaled by the leg-length ratio) leaves the avatar's
+//!   soles 2-9 cm in the floor on the CMU clips (5 cm above it on 11_01). The whole pose moves
+//!   vertically by minus the feet's running ground estimate, so planted feet stand on the
+//!   floor and a swing foot is no longer dragged through it.
+//! * **Low-foot speed limit** ([`FootSkateOptions::max_low_foot_speed_mps`]): a free foot whose
+//!   whole sole is near the floor (a lock released by drift, a foot whose noisy input jitters
+//!   too fast to lock, a swing foot gliding low before it lands) moves at most 0.5 m/s
+//!   horizontally; the excess is held by the leg's fading correction, at most
+//!   [`FootSkateOptions::max_low_foot_hold_m`] from the input (farther, the input really
+//!   stepped and the foot follows at any speed).
 //!
 //! The corrector needs the input frames in order. After a gap longer than
 //! [`FootSkateOptions::reset_after_s`], or a non-positive `dt`, it starts over.
@@ -188,6 +196,21 @@ pub struct FootSkateOptions {
     pub root_return_tau_s: f32,
     /// A gap between frames longer than this restarts the filter.
     pub reset_after_s: f32,
+    /// Move the whole pose vertically so the planted feet stand on the floor (their running
+    /// ground estimate). The retargeter's root height (the performer's hip height scaled by
+    /// the leg-length ratio) leaves the avatar's soles 2-9 cm in the floor on the CMU clips,
+    /// or 5 cm above it (11_01); a swing foot dragged through the floor is skating too.
+    pub stand_on_floor: bool,
+    /// Largest such shift, either way.
+    pub max_floor_shift_m: f32,
+    /// Fastest horizontal speed of a free (unlocked) foot whose whole sole is near the floor
+    /// (below [`FootSkateOptions::min_height_margin_m`]), m/s: a released lock returns to the
+    /// input at this speed, and a jittering low foot cannot slide faster (the skating measure
+    /// counts 0.75 m/s). `f32::INFINITY` turns the limit off.
+    pub max_low_foot_speed_mps: f32,
+    /// Farthest (horizontally) that limit holds a foot from the input's; beyond it the foot
+    /// follows the input at any speed (a real step or shuffle).
+    pub max_low_foot_hold_m: f32,
 }
 
 impl Default for FootSkateOptions {
@@ -212,6 +235,10 @@ impl Default for FootSkateOptions {
             relock_wait_s: 0.2,
             root_return_tau_s: 0.5,
             reset_after_s: 0.5,
+            stand_on_floor: true,
+            max_floor_shift_m: 0.2,
+            max_low_foot_speed_mps: 0.5,
+            max_low_foot_hold_m: 0.2,
         }
     }
 }
@@ -263,6 +290,8 @@ struct FootState {
     correction: Option<Correction>,
     relock_wait_s: f32,
     prev_contact: Option<Vec3>,
+    /// Last output's sole points (heel, ball), world, with their heights above the floor.
+    prev_output_sole: Option<[(Vec3, f32); 2]>,
     /// Smoothed contact position on the sole (0 heel .. 1 ball).
     pivot: Option<f32>,
     /// Smoothed orientation of a held foot.
@@ -279,6 +308,7 @@ impl FootState {
             correction: None,
             relock_wait_s: 0.0,
             prev_contact: None,
+            prev_output_sole: None,
             pivot: None,
             foot_rotation: None,
         }
@@ -535,6 +565,61 @@ impl FootSkateCorrector {
         ]
     }
 
+    /// Slows a free leg whose whole sole is near the floor to
+    /// [`FootSkateOptions::max_low_foot_speed_mps`]: its lower sole point may move at most that
+    /// far from the last output's since the last frame (horizontally); the excess becomes the
+    /// leg's correction (held by IK, faded out as the foot lifts or slows).
+    fn limit_low_foot(
+        &mut self,
+        k: usize,
+        pose: &AvatarPose,
+        root_offset: Vec3,
+        floor_y: f32,
+        dt: f32,
+        rot: &mut [Quat; 3],
+    ) {
+        let o = self.options;
+        let Some(prev) = self.feet[k].prev_output_sole else {
+            return;
+        };
+        if !(o.max_low_foot_speed_mps.is_finite() && dt > 0.0) {
+            return;
+        }
+        let leg = &self.legs[k];
+        let hip = pose.heads[leg.thigh] + root_offset;
+        let ankle = hip + rot[0] * Vec3::Y * leg.upper_len + rot[1] * Vec3::Y * leg.lower_len;
+        // Heights here are above the floor the output stands on (the pose is already shifted).
+        let sole = leg.sole(ankle, rot[2], floor_y);
+        let margin = o.min_height_margin_m;
+        let low = |p: &[(Vec3, f32); 2]| p[0].1.max(p[1].1) < margin;
+        if !(low(&sole) && low(&prev)) {
+            return;
+        }
+        let j = if sole[0].1 <= sole[1].1 { 0 } else { 1 };
+        let step = horizontal(sole[j].0 - prev[j].0);
+        let allowed = o.max_low_foot_speed_mps * dt;
+        let len = step.length();
+        if len <= allowed || len.is_nan() {
+            return;
+        }
+        let input_ankle = pose.heads[leg.foot] + root_offset;
+        // Held back at most this far from the input.
+        let mut offset = horizontal(ankle - step * (1.0 - allowed / len) - input_ankle);
+        let longest = o.max_low_foot_hold_m;
+        if offset.length() > longest {
+            offset *= longest / offset.length();
+        }
+        let target = Vec3::new(input_ankle.x + offset.x, ankle.y, input_ankle.z + offset.z);
+        let mut solved = self.solve_leg(k, pose, root_offset, target);
+        solved[2] = rot[2];
+        self.feet[k].correction = Some(Correction {
+            offset: horizontal(target - input_ankle),
+            foot: (rot[2] * pose.rotations[leg.foot].inverse()).normalize(),
+            remaining: 1.0,
+        });
+        *rot = solved;
+    }
+
     /// Corrects `pose` (the retargeter's output for this frame, sensor space) in place: the
     /// planted foot stays where it was planted, the legs are re-solved, the root moved if the
     /// leg cannot reach; `heads`, `rotations` and `local_rotations` stay consistent, and all
@@ -686,6 +771,21 @@ impl FootSkateCorrector {
             }
         }
 
+        // Floor contact: the whole pose moves vertically so the planted feet's ground estimate
+        // is the floor (the retargeter's leg-ratio root height leaves the avatar a few
+        // centimetres in or above it).
+        let floor_shift = if o.stand_on_floor {
+            let ground = 0.5 * (self.feet[0].ground + self.feet[1].ground);
+            (-ground).clamp(-o.max_floor_shift_m, o.max_floor_shift_m)
+        } else {
+            0.0
+        };
+        if floor_shift != 0.0 {
+            for h in &mut pose.heads {
+                h.y += floor_shift;
+            }
+        }
+
         // 3. Locks: roll, drift release and release (the released leg keeps the lock's offset
         // from the input and fades it out), the free legs' output, then new locks where the free
         // legs put the feet (no jump).
@@ -744,6 +844,10 @@ impl FootSkateCorrector {
         for foot in Foot::BOTH {
             let k = foot.index();
             out_rot[k] = self.free_leg(k, pose, root_offset);
+            if self.feet[k].lock.is_none() {
+                // A new lock starts where the slowed foot is.
+                self.limit_low_foot(k, pose, root_offset, floor_y, dt, &mut out_rot[k]);
+            }
         }
         for foot in Foot::BOTH {
             let k = foot.index();
@@ -824,6 +928,15 @@ impl FootSkateCorrector {
             out_rot[k] = solved;
         }
 
+        // The free legs again on the final root (the constrained foot may have moved it).
+        for foot in Foot::BOTH {
+            let k = foot.index();
+            if self.feet[k].lock.is_none() {
+                out_rot[k] = self.free_leg(k, pose, root_offset);
+                self.limit_low_foot(k, pose, root_offset, floor_y, dt, &mut out_rot[k]);
+            }
+        }
+
         // 4. Write the pose: leg frames, locals, root translation, forward kinematics.
         let input_ankles: [Vec3; 2] =
             std::array::from_fn(|k| pose.heads[self.legs[k].foot] + root_offset);
@@ -851,6 +964,9 @@ impl FootSkateCorrector {
             let k = foot.index();
             let s = &mut self.feet[k];
             s.prev_contact = Some(contacts[k].mid);
+            let leg = &self.legs[k];
+            s.prev_output_sole =
+                Some(leg.sole(pose.heads[leg.foot], pose.rotations[leg.foot], floor_y));
             s.relock_wait_s = (s.relock_wait_s - dt).max(0.0);
         }
         let th = [self.thresholds(Foot::Left), self.thresholds(Foot::Right)];

@@ -714,3 +714,109 @@ fn the_corrector_survives_bad_input() {
     no_legs.bones.retain(|b| !b.name.starts_with("calf"));
     assert!(FootSkateCorrector::new(no_legs, FootSkateOptions::default()).is_err());
 }
+
+/// The retargeted avatar stands a few centimetres in (or above) the floor; the corrector moves
+/// it onto the floor: standing on a floor 6 cm higher or lower than the input's, the output's
+/// floor (5th percentile of its lowest sole point, measured independently of the corrector's
+/// running estimate) ends within 1.5 cm of it, while without the option it keeps the offset.
+#[test]
+fn the_corrected_avatar_stands_on_the_floor() {
+    let sk = common::skeleton();
+    let input = retarget(&sk, &frames("141_16.bvh"));
+    let input_floor = estimate_floor(&sk, &input)
+        .expect("measure")
+        .expect("a floor");
+    for shift in [-0.06f32, 0.06] {
+        let floor = input_floor + shift;
+        for stand in [true, false] {
+            let mut corrector = FootSkateCorrector::new(
+                sk.clone(),
+                FootSkateOptions {
+                    stand_on_floor: stand,
+                    ..FootSkateOptions::default()
+                },
+            )
+            .expect("corrector");
+            let out: Vec<AvatarPose> = input
+                .iter()
+                .map(|p| {
+                    let mut pose = p.clone();
+                    corrector.correct(&mut pose, floor, DT);
+                    pose
+                })
+                .collect();
+            // After the estimate has settled (2 s time constant): the last third of the clip.
+            let tail = &out[out.len() * 2 / 3..];
+            let out_floor = estimate_floor(&sk, tail)
+                .expect("measure")
+                .expect("a floor");
+            println!(
+                "floor {:+.1} cm from the input's, stand_on_floor {stand}: output floor {:+.1} cm from it",
+                100.0 * shift,
+                100.0 * (out_floor - floor)
+            );
+            if stand {
+                assert!((out_floor - floor).abs() < 0.015, "{shift}: {out_floor}");
+            } else {
+                assert!(
+                    (out_floor - input_floor).abs() < 0.01,
+                    "{shift}: {out_floor}"
+                );
+            }
+        }
+    }
+}
+
+/// A free foot near the floor never slides faster than `max_low_foot_speed_mps`: jittered
+/// walks pass through the corrector with every lock off, and a foot whose whole sole is low
+/// moves at most that far per frame (the hold distance is unbounded here).
+#[test]
+fn a_low_free_foot_slides_no_faster_than_the_limit() {
+    let sk = common::skeleton();
+    let options = FootSkateOptions {
+        // No locks at all: every foot is free, so only the speed limit acts.
+        lock_both_feet: false,
+        max_contact_height_m: -1.0,
+        max_low_foot_hold_m: 10.0,
+        ..FootSkateOptions::default()
+    };
+    let mut checked = 0;
+    for file in ["07_01.bvh", "16_11.bvh"] {
+        let input = retarget(&sk, &jitter(&frames(file), 7));
+        let floor = estimate_floor(&sk, &input)
+            .expect("measure")
+            .expect("a floor");
+        let criteria = SkateCriteria {
+            height_m: options.min_height_margin_m,
+            // 1 mm of slack: the IK stops just short of a straight knee.
+            slide_m: options.max_low_foot_speed_mps * DT + 1e-3,
+            foot_height: FootHeight::WholeFoot,
+        };
+        let mut corrector = FootSkateCorrector::new(sk.clone(), options).expect("corrector");
+        let mut out = Vec::new();
+        for p in &input {
+            let mut pose = p.clone();
+            corrector.correct(&mut pose, floor, DT);
+            assert!(
+                corrector
+                    .status()
+                    .is_some_and(|s| s.locked == [false, false])
+            );
+            out.push(pose);
+        }
+        let before = foot_skating(&sk, &input, floor, criteria).expect("measure");
+        let after = foot_skating(&sk, &out, floor, criteria).expect("measure");
+        println!(
+            "{file}: low feet faster than {} m/s in {} -> {} of {} frame pairs",
+            options.max_low_foot_speed_mps, before.skating_pairs, after.skating_pairs, after.pairs
+        );
+        assert!(before.skating_pairs > 5, "{file}: the input must slide");
+        assert_eq!(
+            after.skating_pairs, 0,
+            "{file}: max slide {}",
+            after.max_slide_m
+        );
+        checked += after.on_floor[0] + after.on_floor[1];
+    }
+    assert!(checked > 50, "too few low-foot pairs checked: {checked}");
+}
