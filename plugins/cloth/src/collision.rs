@@ -345,20 +345,6 @@ impl SweptCollider {
         let (d, n) = self.end.distance_normal(p - self.end.origin);
         (d - thickness, n)
     }
-
-    /// Discrete push-out of `p` to the nearest skin surface; returns the corrected position
-    /// and whether it was moved.
-    #[inline]
-    pub fn push_out(&self, p: Vec3A, thickness: f32) -> (Vec3A, bool) {
-        let l = p - self.end.origin;
-        let (d, n) = self.end.distance_normal(l);
-        let s = d - thickness;
-        if s >= 0.0 {
-            (p, false)
-        } else {
-            (p - s * n, true)
-        }
-    }
 }
 
 /// Projects `now` out of `plane` (inflated by `thickness`) with friction against the motion

@@ -83,6 +83,11 @@ const TRIANGLE_ITEM: usize = 1024;
 const TETHER_ROUNDS: usize = 6;
 /// Alternations between tethers and collider push-out when they conflict.
 const RECONCILE_ROUNDS: usize = 8;
+/// Rounds of the joint push-out of a particle inside overlapping colliders.
+const OVERLAP_ROUNDS: usize = 6;
+/// Longest joint push-out out of two shapes, in multiples of the deeper one's depth (the
+/// crease of two surfaces meeting at 60° or more).
+const CREASE_REACH: f32 = 2.0;
 /// A parallel step whose threads waited for each other more than half the time, and more than
 /// this, was slowed down by the operating system descheduling a thread that held work.
 const STALL_MIN_NS: u64 = 1_000_000;
@@ -1726,7 +1731,8 @@ impl StepContext<'_> {
                 let start = self.xs_prev.get(i);
                 let mut p = self.xs.get(i);
                 let mut touched = false;
-                for _pass in 0..3 {
+                let mut settled = true;
+                for pass in 0..3 {
                     let mut moved = false;
                     let (seg_low, seg_high) = (start.min(p), start.max(p));
                     let mut test = |collider: &SweptCollider| {
@@ -1761,6 +1767,16 @@ impl StepContext<'_> {
                     if !moved || shapes < 2 {
                         break;
                     }
+                    settled = pass < 2;
+                }
+                if !settled {
+                    // Still pushed back and forth after the last pass: caught where two shapes
+                    // overlap (the thighs in a stride); settle in the crease between them.
+                    p = if test_all {
+                        self.resolve_overlaps(p, colliders.iter())
+                    } else {
+                        self.resolve_overlaps(p, near.iter().map(|&c| &colliders[c as usize]))
+                    };
                 }
                 if touched && self.tether_violated(i, p, sub) {
                     p = self.reconcile(i, start, p, sub, colliders);
@@ -1768,6 +1784,50 @@ impl StepContext<'_> {
                 self.xs.set(i, p);
             }
         }
+    }
+
+    /// Moves `p` out of every collider and plane (with the skin): the smallest move that
+    /// clears the two most violated shapes, linearised at `p` (their tangent half-spaces),
+    /// repeated. One violated shape is a plain push-out; two are solved together, so a particle
+    /// caught where two colliders overlap settles in the crease between them instead of being
+    /// pushed back and forth (sequential push-outs leave it inside one of them).
+    fn resolve_overlaps<'c>(
+        &self,
+        mut p: Vec3A,
+        colliders: impl Iterator<Item = &'c SweptCollider> + Clone,
+    ) -> Vec3A {
+        let thickness = self.k.thickness;
+        for _round in 0..OVERLAP_ROUNDS {
+            // The two deepest violations: (signed skin distance, outward normal).
+            let mut worst: [Option<(f32, Vec3A)>; 2] = [None, None];
+            let mut note = |s: f32, n: Vec3A| {
+                if s >= 0.0 || s.is_nan() {
+                    return;
+                }
+                if worst[0].is_none_or(|w| s < w.0) {
+                    worst[1] = worst[0];
+                    worst[0] = Some((s, n));
+                } else if worst[1].is_none_or(|w| s < w.0) {
+                    worst[1] = Some((s, n));
+                }
+            };
+            for collider in colliders.clone() {
+                if collider.contains_point(p) {
+                    let (s, n) = collider.skin_distance(p, thickness);
+                    note(s, n);
+                }
+            }
+            for plane in self.planes {
+                let n = Vec3A::from(plane.normal);
+                note(n.dot(p) - plane.offset - thickness, n);
+            }
+            p += match worst {
+                [None, _] => break,
+                [Some((s, n)), None] => -s * n,
+                [Some(a), Some(b)] => clear_two(a, b),
+            };
+        }
+        p
     }
 
     /// Resolves a particle that a collider pushed beyond its tether (see the module
@@ -1826,27 +1886,43 @@ impl StepContext<'_> {
             p = self.apply_tethers(i, collided, sub);
         }
         // Out of every collider (a slid particle is at most a rounding error inside).
-        for _round in 0..2 {
-            let mut pushed = false;
-            for collider in colliders {
-                if collider.contains_point(p) {
-                    let (q, hit) = collider.push_out(p, k.thickness);
-                    p = q;
-                    pushed |= hit;
-                }
-            }
-            for plane in self.planes {
-                let q = collide_plane(plane, p, p, k.thickness, 0.0);
-                pushed |= q != p;
-                p = q;
-            }
-            if !pushed {
-                break;
-            }
-        }
+        p = self.resolve_overlaps(p, colliders.iter());
         // SAFETY: particle `i` belongs to the calling item.
         unsafe { self.xs_prev.set(i, start + (p - collided)) };
         p
+    }
+}
+
+/// The smallest displacement `d` with `n_a·d ≥ -s_a` and `n_b·d ≥ -s_b` (both `s < 0`: the
+/// depths inside two half-spaces with unit normals `n_a`, `n_b`).
+#[inline]
+fn clear_two((sa, na): (f32, Vec3A), (sb, nb): (f32, Vec3A)) -> Vec3A {
+    // One push alone may clear both.
+    let da = -sa * na;
+    if nb.dot(da) >= -sb {
+        return da;
+    }
+    let db = -sb * nb;
+    if na.dot(db) >= -sa {
+        return db;
+    }
+    // Both active: d = α n_a + β n_b with n_a·d = -s_a and n_b·d = -s_b.
+    let c = na.dot(nb);
+    let det = 1.0 - c * c;
+    if det < 1e-4 {
+        // (Anti)parallel normals: no finite crease; take the deeper push.
+        return if sa < sb { da } else { db };
+    }
+    let alpha = (-sa + c * sb) / det;
+    let beta = (-sb + c * sa) / det;
+    let d = alpha * na + beta * nb;
+    // Nearly opposite normals (a particle pinched between two shapes) put the linearised crease
+    // far away: there the deeper push alone is taken.
+    let deeper = if sa < sb { da } else { db };
+    if d.length_squared() > CREASE_REACH * CREASE_REACH * deeper.length_squared() {
+        deeper
+    } else {
+        d
     }
 }
 
@@ -2080,6 +2156,46 @@ unsafe fn integrate_free_with<L: Lanes>(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn clear_two_finds_the_smallest_move_out_of_two_half_spaces() {
+        // Independent check: the smallest move out of two half-spaces, by brute force over a
+        // grid of moves in their plane.
+        let cases = [
+            (-0.01, Vec3A::X, -0.004, Vec3A::Y),
+            (-0.01, Vec3A::X, -0.004, Vec3A::new(0.6, 0.8, 0.0)),
+            (
+                -0.003,
+                Vec3A::new(0.0, 1.0, 0.0),
+                -0.01,
+                Vec3A::new(-0.5, 0.866, 0.0),
+            ),
+            (-0.01, Vec3A::X, -0.002, Vec3A::new(0.999, 0.0447, 0.0)),
+        ];
+        for (sa, na, sb, nb) in cases {
+            let na = na.normalize();
+            let nb = nb.normalize();
+            let d = clear_two((sa, na), (sb, nb));
+            assert!(na.dot(d) >= -sa - 1e-6 && nb.dot(d) >= -sb - 1e-6, "{d}");
+            let mut best = f32::INFINITY;
+            let n = 400;
+            for i in -n..=n {
+                for j in -n..=n {
+                    let m = Vec3A::new(i as f32, j as f32, 0.0) * (0.05 / n as f32);
+                    if na.dot(m) >= -sa && nb.dot(m) >= -sb {
+                        best = best.min(m.length());
+                    }
+                }
+            }
+            assert!(d.length() <= best + 2e-4, "{} vs {best}", d.length());
+        }
+        // Opposite normals (pinched): only the deeper push, never a far escape.
+        let d = clear_two(
+            (-0.01, Vec3A::X),
+            (-0.005, -Vec3A::X.lerp(Vec3A::Y, 0.05).normalize()),
+        );
+        assert!(d.length() <= 0.0101, "{d}");
+    }
+
     use super::*;
 
     fn random(seed: &mut u32) -> f32 {
