@@ -81,23 +81,7 @@ pub fn load_garment(
 }
 
 fn sim_garment(mesh: &GarmentMesh) -> SimGarment {
-    // The static (skinned) part of a mesh garment is attached as a whole.
-    let mut attached: Vec<u32> = mesh.attached.clone();
-    attached.extend(
-        mesh.skinned
-            .iter()
-            .enumerate()
-            .filter(|(_, s)| **s)
-            .map(|(i, _)| i as u32),
-    );
-    attached.sort_unstable();
-    attached.dedup();
-    SimGarment {
-        positions: mesh.positions.clone(),
-        triangles: mesh.triangles.clone(),
-        attached,
-        fabric: mesh.fabric,
-    }
+    SimGarment::from_mesh(mesh)
 }
 
 /// Skinning transforms (rest model space -> sensor space) of an avatar pose.
@@ -153,6 +137,9 @@ pub struct SimReport {
     pub frame_ms: Stats,
     /// Deepest particle inside a body collider after a step, mm.
     pub max_penetration_mm: f32,
+    /// Largest radius a collider gave up to the skinned (attached) garment in a step, mm
+    /// (`fitroom_garment::sim::fit_to_anchors`).
+    pub max_collider_shrink_mm: f32,
     /// Largest edge stretch over the run, % (includes the start, where the garment is put in
     /// the skinned pose of the first frame).
     pub max_strain_pct: f32,
@@ -206,7 +193,7 @@ pub fn sim(
     let per_frame = (STEP_HZ / 30.0).round() as usize;
     let mut prev: Option<(Vec<Quat>, Vec<Vec3>)> = None;
     let (mut step_ms, mut frame_ms) = (Vec::new(), Vec::new());
-    let (mut max_pen, mut max_strain) = (0.0f32, 0.0f32);
+    let (mut max_pen, mut max_strain, mut max_shrink) = (0.0f32, 0.0f32, 0.0f32);
     let mut all_finite = true;
     let mut first_blow_up: Option<String> = None;
     let mut max_tether = 0.0f32;
@@ -236,6 +223,7 @@ pub fn sim(
             }
             max_tether = max_tether.max(sim.max_tether_ratio());
             max_pen = max_pen.max(step.max_penetration_m);
+            max_shrink = max_shrink.max(step.collider_shrink_m);
             max_strain = max_strain.max(step.max_strain_pct);
             last_skin = skin;
         }
@@ -249,14 +237,7 @@ pub fn sim(
         fabric: mesh.fabric_name.clone(),
         particles: mesh.positions.len(),
         attached: mesh.attached.len(),
-        colliders: fitroom_body::colliders::BodyColliders::fit(
-            model,
-            &shaped.positions,
-            &shaped.rest_pose,
-            &Default::default(),
-        )?
-        .capsules
-        .len(),
+        colliders: sim.collider_count(),
         motion: motion.display().to_string(),
         frames,
         steps: step_ms.len(),
@@ -264,6 +245,7 @@ pub fn sim(
         step_ms: stats(step_ms),
         frame_ms: stats(frame_ms),
         max_penetration_mm: max_pen * 1e3,
+        max_collider_shrink_mm: max_shrink * 1e3,
         max_strain_pct: max_strain,
         final_strain_pct: stats(sim.strain_pct().into_iter().map(f64::from).collect()),
         max_tether_ratio: max_tether,
@@ -409,6 +391,7 @@ pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> R
             triangles: mesh.triangles().to_vec(),
             attached,
             fabric: fitroom_cloth::Fabric::cotton(),
+            ignore_colliders: Vec::new(),
         };
         let mut s = GarmentSim::new(
             model,

@@ -826,7 +826,8 @@ fn cloth_command(command: ClothCommand) -> Result<()> {
                 println!(
                     "{} size {} ({}): {} particles, {} attached, {} colliders; {} steps of 1/120 s, {} substeps\n\
                      step {:.2} ms mean, {:.2} p95, {:.2} max; per video frame {:.2} ms mean\n\
-                     max penetration {:.2} mm, max strain {:.1}%, resets {}, all finite: {}",
+                     max penetration {:.2} mm, longest tether {:.3} of its rest length, max strain {:.1}%, resets {}, all finite: {}\n\
+                     colliders gave up at most {:.1} mm of radius to the skinned garment",
                     r.garment,
                     r.size,
                     r.fabric,
@@ -840,9 +841,11 @@ fn cloth_command(command: ClothCommand) -> Result<()> {
                     r.step_ms.max,
                     r.frame_ms.mean,
                     r.max_penetration_mm,
+                    r.max_tether_ratio,
                     r.max_strain_pct,
                     r.resets,
-                    r.all_finite
+                    r.all_finite,
+                    r.max_collider_shrink_mm
                 );
             }
         }

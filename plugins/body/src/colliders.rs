@@ -99,6 +99,17 @@ const TRUNK: [(&str, &str, &str, &str); 4] = [
     ("spine_03", "neck_01", "spine_03 left", "spine_03 right"),
 ];
 
+/// The names [`BodyColliders::fit`] gives its colliders, in its order.
+pub fn collider_names() -> Vec<&'static str> {
+    let mut names: Vec<&'static str> = Vec::new();
+    for (_, _, left, right) in TRUNK {
+        names.extend([left, right]);
+    }
+    names.extend(LIMBS.iter().map(|l| l.2));
+    names.extend(BALLS.iter().map(|b| b.1));
+    names
+}
+
 fn percentile(mut v: Vec<f32>, q: f32) -> Option<f32> {
     v.retain(|x| x.is_finite());
     if v.is_empty() {

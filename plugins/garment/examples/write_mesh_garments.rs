@@ -71,6 +71,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         panels: vec!["Waistband".into(), "Skirt".into()],
         rest_2d,
         rows: Vec::new(),
+        ignore_colliders: Vec::new(),
     };
     std::fs::create_dir_all(&out)?;
     write_obj(&garment, out.join("tube_skirt.obj"))?;

@@ -51,6 +51,8 @@ pub struct GarmentMesh {
     pub rest_2d: Vec<Vec2>,
     /// The tube rows where all panels of a wrap were present (girths, offsets).
     pub rows: Vec<RowReport>,
+    /// Body colliders the garment does not collide with.
+    pub ignore_colliders: Vec<String>,
 }
 
 /// The two edges of one seam, as garment vertex lists in pairing order.
@@ -263,6 +265,7 @@ impl Pattern {
             panel_of_vertex,
             rest_2d: positions_2d,
             rows,
+            ignore_colliders: self.ignore_colliders.clone(),
         };
         if options.sew {
             garment.sew(body, options.sew_iterations, clearance);
@@ -483,6 +486,7 @@ impl GarmentMesh {
                 Vec::new()
             },
             rows: self.rows.clone(),
+            ignore_colliders: self.ignore_colliders.clone(),
         })
     }
 

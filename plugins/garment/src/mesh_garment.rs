@@ -155,6 +155,7 @@ fn finish(
         panel_of_vertex,
         rest_2d,
         rows: Vec::new(),
+        ignore_colliders: Vec::new(),
     })
 }
 

@@ -57,6 +57,9 @@
 //!         (panel: "front", edge: "waist", follows: torso),
 //!     ],
 //!     skinned: [],   // panels that are the static, skinned part (seed 000 §3.2.1)
+//!     // Optional: body colliders the garment ignores (e.g. ["hand_l", "hand_r"] for a skirt
+//!     // the swinging hands would otherwise catch and drag).
+//!     ignore_colliders: [],
 //! )
 //! ```
 //!
@@ -103,6 +106,9 @@ pub struct Pattern {
     pub attach: Vec<Attach>,
     /// Panels of the static, skinned part.
     pub skinned: Vec<usize>,
+    /// Body colliders this garment does not collide with (names of
+    /// [`fitroom_body::colliders::collider_names`]).
+    pub ignore_colliders: Vec<String>,
 }
 
 /// One size of a garment.
@@ -221,6 +227,8 @@ struct GarmentFile {
     attach: Vec<AttachFile>,
     #[serde(default)]
     skinned: Vec<String>,
+    #[serde(default)]
+    ignore_colliders: Vec<String>,
 }
 
 fn default_edge_cm() -> f32 {
@@ -567,6 +575,20 @@ impl Pattern {
             }
         }
 
+        let known = fitroom_body::colliders::collider_names();
+        for (k, name) in raw.ignore_colliders.iter().enumerate() {
+            if !known.contains(&name.as_str()) {
+                return Err(problems.at(
+                    &["ignore_colliders", &quoted(name)],
+                    format!("ignore_colliders[{k}]"),
+                    format!(
+                        "no body collider \"{name}\"; the colliders are: {}",
+                        known.join(", ")
+                    ),
+                ));
+            }
+        }
+
         // Sizes.
         let chart = match &raw.size_chart {
             Some(rel) => {
@@ -643,6 +665,7 @@ impl Pattern {
             seams,
             attach,
             skinned,
+            ignore_colliders: raw.ignore_colliders,
         })
     }
 

@@ -259,12 +259,7 @@ fn load_garment(
             substeps: settings.substeps.max(1),
             ..SolverSettings::default()
         };
-        let garment = SimGarment {
-            positions: mesh.positions.clone(),
-            triangles: mesh.triangles.clone(),
-            attached: mesh.attached.clone(),
-            fabric: mesh.fabric,
-        };
+        let garment = SimGarment::from_mesh(&mesh);
         let sim = GarmentSim::new(&body.model, &body.positions, &body.rest, &garment, solver)
             .map_err(|e| e.to_string())?;
         Ok((mesh, sim))

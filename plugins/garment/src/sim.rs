@@ -32,6 +32,32 @@ pub struct SimGarment {
     /// Vertices that follow the body.
     pub attached: Vec<u32>,
     pub fabric: Fabric,
+    /// Body colliders (by name) the garment does not collide with.
+    pub ignore_colliders: Vec<String>,
+}
+
+impl SimGarment {
+    /// The simulation's view of a garment: its attached vertices and its static, skinned part
+    /// (seed 000 §3.2.1) follow the body; the rest is simulated.
+    pub fn from_mesh(mesh: &crate::GarmentMesh) -> Self {
+        let mut attached: Vec<u32> = mesh.attached.clone();
+        attached.extend(
+            mesh.skinned
+                .iter()
+                .enumerate()
+                .filter(|(_, s)| **s)
+                .map(|(i, _)| i as u32),
+        );
+        attached.sort_unstable();
+        attached.dedup();
+        Self {
+            positions: mesh.positions.clone(),
+            triangles: mesh.triangles.clone(),
+            attached,
+            fabric: mesh.fabric,
+            ignore_colliders: mesh.ignore_colliders.clone(),
+        }
+    }
 }
 
 /// Why a garment cannot be simulated.
@@ -43,6 +69,8 @@ pub enum SimError {
     Colliders(#[from] fitroom_body::colliders::ColliderError),
     #[error("{got} skinning transforms, the body has {expected} bones")]
     Bones { got: usize, expected: usize },
+    #[error("the garment ignores a body collider \"{0}\" that the body does not have")]
+    UnknownCollider(String),
 }
 
 /// Per-step figures.
@@ -52,6 +80,9 @@ pub struct SimStep {
     pub max_penetration_m: f32,
     /// Largest edge stretch, % over rest length.
     pub max_strain_pct: f32,
+    /// Largest radius a body collider gave up to the skinned garment this step
+    /// ([`fit_to_anchors`]), metres.
+    pub collider_shrink_m: f32,
     /// Whether the step blew up and the garment was reset to its skinned pose.
     pub reset: bool,
     /// What the blow-up guard saw, if it fired.
@@ -95,6 +126,70 @@ pub const BODY_SKIN_OFFSET_M: f32 = 0.003;
 
 /// Smoothing passes of the garment's skin weights over its mesh.
 const SKIN_SMOOTHING: usize = 12;
+
+/// Largest share of a collider's radius that [`fit_to_anchors`] takes away.
+const MAX_COLLIDER_SHRINK: f32 = 0.4;
+
+/// Shrinks posed colliders `(a, b, radius_a, radius_b)` so that no point of `anchors` is
+/// inside one by more than `-skin` (i.e. each stays at least `skin` outside).
+///
+/// The garment's attached vertices are skinned like the body's skin, but the colliders are
+/// rigid with their bones: in a stride the top of a thigh's capsule comes out through the
+/// skinned hip crease (by up to 1.7 cm on the walking clips), so the free cloth next to the
+/// waistband could satisfy neither its tethers (a few centimetres to an anchor that is inside
+/// the capsule) nor the collision, and was stretched until the blow-up guard fired. The
+/// skinned garment shows where the body's surface is there; the capsule yields to it. An
+/// anchor at axis parameter `t` (0 at `a`, 1 at `b`) shrinks the nearer end's radius by
+/// `depth / (1 - t)` or `depth / t`, so the radius at `t` (linear along the axis) loses at
+/// least `depth`; at most [`MAX_COLLIDER_SHRINK`] of a radius goes. Returns the largest radius
+/// taken away.
+pub fn fit_to_anchors(
+    colliders: &mut [(Vec3, Vec3, f32, f32)],
+    anchors: &[Vec3],
+    skin: f32,
+) -> f32 {
+    let mut largest = 0.0f32;
+    for (a, b, ra, rb) in colliders.iter_mut() {
+        let reach = ra.max(*rb) + skin;
+        let lo = a.min(*b) - Vec3::splat(reach);
+        let hi = a.max(*b) + Vec3::splat(reach);
+        let axis = *b - *a;
+        let len2 = axis.length_squared();
+        let (mut cut_a, mut cut_b) = (0.0f32, 0.0f32);
+        for &p in anchors {
+            if p.cmplt(lo).any() || p.cmpgt(hi).any() {
+                continue;
+            }
+            let depth = skin - round_cone_distance(p, *a, *b, *ra, *rb);
+            if depth.is_nan() || depth <= 0.0 {
+                continue;
+            }
+            let t = if len2 > 1e-12 {
+                ((p - *a).dot(axis) / len2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            if t < 0.5 {
+                cut_a = cut_a.max(depth / (1.0 - t));
+            } else {
+                cut_b = cut_b.max(depth / t);
+            }
+        }
+        let (cut_a, cut_b) = if len2 <= 1e-12 {
+            let cut = cut_a.max(cut_b).min(MAX_COLLIDER_SHRINK * *ra);
+            (cut, cut)
+        } else {
+            (
+                cut_a.min(MAX_COLLIDER_SHRINK * *ra),
+                cut_b.min(MAX_COLLIDER_SHRINK * *rb),
+            )
+        };
+        *ra -= cut_a;
+        *rb -= cut_b;
+        largest = largest.max(cut_a).max(cut_b);
+    }
+    largest
+}
 
 /// Skin weights averaged with the mesh neighbours' `passes` times (Jacobi), then cut to the
 /// four largest and renormalised.
@@ -232,8 +327,16 @@ impl GarmentSim {
             ..settings
         };
         let solver = ClothSolver::new(&mesh, garment.fabric, &garment.attached, settings)?;
-        let colliders =
+        let mut colliders =
             BodyColliders::fit(model, body_positions, rest, &ColliderOptions::default())?;
+        for name in &garment.ignore_colliders {
+            if !colliders.capsules.iter().any(|c| c.name == name) {
+                return Err(SimError::UnknownCollider(name.clone()));
+            }
+        }
+        colliders
+            .capsules
+            .retain(|c| !garment.ignore_colliders.iter().any(|n| n == c.name));
         // Every vertex takes the skin of its nearest body vertex, smoothed over the garment's
         // mesh (a sleeve's armpit edge would otherwise be torn between the arm and the chest in
         // a pose): the attached ones follow the body with it, and a reset puts the whole garment
@@ -326,10 +429,29 @@ impl GarmentSim {
         Ok(())
     }
 
-    fn colliders(&self, skinning: &[Affine3A]) -> (Vec<Sphere>, Vec<[u32; 2]>) {
+    /// The body colliders posed by `skinning`, each shrunk where the garment's attached
+    /// (skinned) vertices `anchors` lie inside it (see [`fit_to_anchors`]).
+    /// Also returns the largest radius taken away, metres.
+    fn posed_colliders(
+        &self,
+        skinning: &[Affine3A],
+        anchors: &[Vec3],
+    ) -> (Vec<(Vec3, Vec3, f32, f32)>, f32) {
+        let mut posed = self.colliders.posed(skinning);
+        let shrink = fit_to_anchors(&mut posed, anchors, BODY_SKIN_OFFSET_M);
+        (posed, shrink)
+    }
+
+    /// The solver's spheres and capsules, and the largest shrink of [`fit_to_anchors`].
+    fn colliders(
+        &self,
+        skinning: &[Affine3A],
+        anchors: &[Vec3],
+    ) -> (Vec<Sphere>, Vec<[u32; 2]>, f32) {
         let mut spheres = Vec::new();
         let mut capsules = Vec::new();
-        for (a, b, ra, rb) in self.colliders.posed(skinning) {
+        let (posed, shrink) = self.posed_colliders(skinning, anchors);
+        for (a, b, ra, rb) in posed {
             let i = spheres.len() as u32;
             spheres.push(Sphere::new(a, ra));
             if a.distance(b) > 1e-6 {
@@ -337,7 +459,14 @@ impl GarmentSim {
                 capsules.push([i, i + 1]);
             }
         }
-        (spheres, capsules)
+        (spheres, capsules, shrink)
+    }
+
+    fn anchors(&self, skinning: &[Affine3A]) -> Vec<Vec3> {
+        self.attached
+            .iter()
+            .map(|&v| self.skin_point(v as usize, skinning))
+            .collect()
     }
 
     /// Puts the garment in its skinned pose, at rest, with the colliders where they are.
@@ -345,7 +474,7 @@ impl GarmentSim {
         self.check(skinning)?;
         let skinned = self.skinned(skinning);
         self.solver.reset_to(&skinned)?;
-        let (spheres, capsules) = self.colliders(skinning);
+        let (spheres, capsules, _) = self.colliders(skinning, &self.anchors(skinning));
         self.solver.set_colliders(&spheres, &capsules)?;
         self.solver.teleport_colliders();
         Ok(())
@@ -356,11 +485,7 @@ impl GarmentSim {
     pub fn step(&mut self, skinning: &[Affine3A], dt: f32) -> Result<SimStep, SimError> {
         self.check(skinning)?;
         let start = std::time::Instant::now();
-        let targets: Vec<Vec3> = self
-            .attached
-            .iter()
-            .map(|&v| self.skin_point(v as usize, skinning))
-            .collect();
+        let targets = self.anchors(skinning);
         let jumped = self.last_targets.as_ref().is_some_and(|last| {
             last.iter()
                 .zip(&targets)
@@ -374,7 +499,7 @@ impl GarmentSim {
         }
         self.last_targets = Some(targets.clone());
         self.solver.set_attachment_targets(&targets)?;
-        let (spheres, capsules) = self.colliders(skinning);
+        let (spheres, capsules, collider_shrink_m) = self.colliders(skinning, &targets);
         self.solver.set_colliders(&spheres, &capsules)?;
         let report: StepReport = self.solver.step(dt)?;
         let mut reset = false;
@@ -395,6 +520,7 @@ impl GarmentSim {
             (0.0, 0.0)
         };
         Ok(SimStep {
+            collider_shrink_m,
             blow_up,
             solve_ms,
             max_penetration_m,
@@ -420,6 +546,11 @@ impl GarmentSim {
     /// Longest tether over its allowed length (1.0 = at the limit).
     pub fn max_tether_ratio(&self) -> f32 {
         self.solver.max_tether_ratio()
+    }
+
+    /// Body colliders the garment collides with.
+    pub fn collider_count(&self) -> usize {
+        self.colliders.capsules.len()
     }
 
     /// Body teleports the garment followed so far.
@@ -457,7 +588,7 @@ impl GarmentSim {
 
     /// Per vertex: distance to the posed body colliders' surface, metres (negative inside).
     pub fn gap_m(&self, skinning: &[Affine3A]) -> Vec<f32> {
-        let posed = self.colliders.posed(skinning);
+        let (posed, _) = self.posed_colliders(skinning, &self.anchors(skinning));
         self.solver
             .positions()
             .iter()
@@ -478,5 +609,40 @@ impl GarmentSim {
             .enumerate()
             .filter(|(i, _)| self.attached.binary_search(&(*i as u32)).is_err())
             .fold(0.0f32, |m, (_, d)| m.max(-d))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn fit_to_anchors_leaves_every_anchor_a_skin_outside() {
+        let skin = 0.003;
+        let capsule = (Vec3::ZERO, Vec3::new(0.0, -0.4, 0.0), 0.07, 0.05);
+        // Anchors inside near each end and in the middle, one outside.
+        let anchors = [
+            Vec3::new(0.06, -0.02, 0.0),
+            Vec3::new(0.0, -0.38, 0.045),
+            Vec3::new(-0.055, -0.2, 0.0),
+            Vec3::new(0.2, -0.2, 0.0),
+        ];
+        let mut colliders = [capsule];
+        let largest = fit_to_anchors(&mut colliders, &anchors, skin);
+        let (a, b, ra, rb) = colliders[0];
+        for p in anchors {
+            let d = round_cone_distance(p, a, b, ra, rb);
+            assert!(d >= skin - 1e-5, "{p}: {d}");
+        }
+        assert!(largest > 0.0 && ra < capsule.2 && rb < capsule.3);
+        assert!((capsule.2 - ra).max(capsule.3 - rb) <= largest + 1e-6);
+        // Nothing inside: nothing changes.
+        let mut untouched = [capsule];
+        assert_eq!(fit_to_anchors(&mut untouched, &anchors[3..], skin), 0.0);
+        assert_eq!(untouched[0], capsule);
+        // A deep anchor takes at most 40 % of a radius.
+        let mut deep = [capsule];
+        fit_to_anchors(&mut deep, &[Vec3::new(0.0, -0.01, 0.0)], skin);
+        assert!((deep[0].2 - 0.6 * capsule.2).abs() < 1e-6);
     }
 }

@@ -60,6 +60,11 @@ fn errors_name_file_line_and_field() {
         (good.replace("fabric: \"denim\"", "fabric: \"velvet\""), "fabric:", "fabric|velvet"),
         (good.replace("ease_cm: 1.0", "ease_cm: -3"), "ease_cm", "ease_cm|accepted 0..=30"),
         (
+            good.replace("\"hand_r\"]", "\"hand_rr\"]"),
+            "\"hand_rr\"",
+            "ignore_colliders[3]|no body collider \"hand_rr\"|the colliders are: pelvis left",
+        ),
+        (
             good.replace("panels: [(\"front\", 0), (\"back\", 180)]", "panels: [(\"front\", 0)]"),
             "name: \"back\"",
             "(back)|is in no wrap",
