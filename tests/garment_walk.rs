@@ -1,11 +1,9 @@
 //! The issue's robustness acceptance on the avatar: garments through 10,000 frames of the
 //! shared walking clips (their 120 Hz frames, one cloth step each, the clips looping, which
-//! teleports the body back to its start): no NaN.
-//! Not met yet, and only guarded against regressions here (40 mm, tethers 2.0, 10 resets per
-//! clip): the issue's 5 mm (the dress reaches 4-25 mm, worst on 16_11, where the skirt is
-//! caught between the thighs' colliders, which overlap in a stride), 110% tethers (1.04-1.62)
-//! and no blow-up (0-3 resets per clip, from the stretch guard). The figures are printed per
-//! clip.
+//! teleports the body back to its start): no NaN, no simulated particle more than 5 mm inside
+//! a body collider after a step, no tether past 110 %, no blow-up reset. The figures are
+//! printed per clip. The T-shirt is not in it: it still tears in some strides (see the issue
+//! notes).
 
 mod common;
 
@@ -77,19 +75,19 @@ fn garments_survive_ten_thousand_frames_of_walking() {
             }
             assert!(r.all_finite, "{garment} {}: NaN", clip.display());
             assert!(
-                r.max_penetration_mm <= 40.0,
+                r.max_penetration_mm <= 5.0,
                 "{garment} {}: {} mm inside",
                 clip.display(),
                 r.max_penetration_mm
             );
             assert!(
-                r.max_tether_ratio <= 2.0,
+                r.max_tether_ratio <= 1.1,
                 "{garment} {}: tether at {}",
                 clip.display(),
                 r.max_tether_ratio
             );
             assert!(
-                r.resets <= 10,
+                r.resets == 0,
                 "{garment} {}: {} resets, first {:?}",
                 clip.display(),
                 r.resets,
