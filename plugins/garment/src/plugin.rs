@@ -295,7 +295,7 @@ fn load_garment(
         });
         return;
     };
-    let mesh = meshes.add(garment_mesh(&sim.positions(), sim.triangles(), None));
+    let mesh = meshes.add(garment_mesh(&sim.render_positions(), sim.triangles(), None));
     commands.spawn((
         WornGarment {
             sim: Box::new(sim),
@@ -381,7 +381,11 @@ fn step_garment(
             && let Some(mut mesh) = meshes.get_mut(&g.mesh)
         {
             let strain = settings.fit_map.then(|| g.sim.strain_pct());
-            *mesh = garment_mesh(&g.sim.positions(), g.sim.triangles(), strain.as_deref());
+            *mesh = garment_mesh(
+                &g.sim.render_positions(),
+                g.sim.triangles(),
+                strain.as_deref(),
+            );
         }
         status.frame_ms = start.elapsed().as_secs_f32() * 1e3;
     }

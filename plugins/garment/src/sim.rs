@@ -109,6 +109,8 @@ pub struct GarmentSim {
     measuring: bool,
     /// Attachment targets of the last step, to notice a teleported body.
     last_targets: Option<Vec<Vec3>>,
+    /// Per vertex: the share of [`RENDER_OFFSET_M`] it is drawn out along its normal.
+    render_weight: Vec<f32>,
     teleports: u32,
 }
 
@@ -123,6 +125,54 @@ const TELEPORT_M: f32 = 0.25;
 /// skirt in places. A larger offset hides that but stretches the skirt against the skinned
 /// bodice until the stretch guard fires (tried: 8 and 20 mm).
 pub const BODY_SKIN_OFFSET_M: f32 = 0.003;
+
+/// How far out along its normals the simulated part of a garment is drawn, metres. The body
+/// colliders sit inside the skin (by 1.5 cm on the trunk and up to 3 cm at the front of the
+/// thighs, so that they never stick out of it) and the cloth rests 3 mm over them, so drawn
+/// where it is simulated a skirt lets the thighs and belly show through in a stride. Colliders
+/// on the skin, or a larger collision offset, stretch the skirt against its skinned waistband
+/// instead (tried: a 10-15 mm offset took tethers to 1.7-2.4 on 16_11). Drawing the free
+/// cloth a little farther out hides most of it (15 mm left large patches of thigh, 25 mm a
+/// few small ones in a long stride) and changes no simulated figure.
+pub const RENDER_OFFSET_M: f32 = 0.025;
+
+/// Edges over which that offset blends in from the attached part.
+pub const RENDER_RAMP_EDGES: u32 = 4;
+
+/// Per vertex: `min(1, edges to the nearest attached vertex / RENDER_RAMP_EDGES)` (1 without
+/// attached vertices).
+fn render_weights(n: usize, triangles: &[[u32; 3]], attached: &[u32]) -> Vec<f32> {
+    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
+    for t in triangles {
+        for k in 0..3 {
+            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
+            if a < n && b < n {
+                neighbours[a].push(b as u32);
+                neighbours[b].push(a as u32);
+            }
+        }
+    }
+    let mut hops = vec![u32::MAX; n];
+    let mut queue = std::collections::VecDeque::new();
+    for &a in attached {
+        if let Some(h) = hops.get_mut(a as usize) {
+            *h = 0;
+            queue.push_back(a as usize);
+        }
+    }
+    while let Some(v) = queue.pop_front() {
+        for &u in &neighbours[v] {
+            let u = u as usize;
+            if hops[u] == u32::MAX {
+                hops[u] = hops[v] + 1;
+                queue.push_back(u);
+            }
+        }
+    }
+    hops.into_iter()
+        .map(|h| (h as f32 / RENDER_RAMP_EDGES as f32).min(1.0))
+        .collect()
+}
 
 /// Smoothing passes of the garment's skin weights over its mesh.
 const SKIN_SMOOTHING: usize = 12;
@@ -380,6 +430,11 @@ impl GarmentSim {
             resets: 0,
             measuring: true,
             last_targets: None,
+            render_weight: render_weights(
+                garment.positions.len(),
+                &garment.triangles,
+                &garment.attached,
+            ),
             teleports: 0,
         })
     }
@@ -530,6 +585,26 @@ impl GarmentSim {
         })
     }
 
+    /// Where to draw the garment: its positions, the simulated part drawn
+    /// [`RENDER_OFFSET_M`] out along its normals (see there), blending in over
+    /// [`RENDER_RAMP_EDGES`] edges from the attached part, which is drawn where it is.
+    pub fn render_positions(&self) -> Vec<Vec3> {
+        let positions = self.positions();
+        let normals = fitroom_body::rig::compute_normals(&positions, &self.triangles);
+        positions
+            .iter()
+            .zip(&normals)
+            .zip(&self.render_weight)
+            .map(|((&p, &n), &w)| {
+                if n.is_finite() {
+                    p + n * (w * RENDER_OFFSET_M)
+                } else {
+                    p
+                }
+            })
+            .collect()
+    }
+
     /// The garment's current positions.
     pub fn positions(&self) -> Vec<Vec3> {
         self.solver
@@ -615,6 +690,29 @@ impl GarmentSim {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn the_render_offset_blends_in_from_the_attached_part() {
+        // A strip of 2 x 8 vertices, attached at its first column.
+        let mut triangles = Vec::new();
+        for i in 0..7u32 {
+            let (a, b, c, d) = (i, i + 1, i + 8, i + 9);
+            triangles.push([a, b, d]);
+            triangles.push([a, d, c]);
+        }
+        let w = render_weights(16, &triangles, &[0, 8]);
+        let expected = |i: u32| (i as f32 / RENDER_RAMP_EDGES as f32).min(1.0);
+        for i in 0..8u32 {
+            assert_eq!(w[i as usize], expected(i), "top {i}");
+            assert_eq!(w[i as usize + 8], expected(i), "bottom {i}");
+        }
+        // Nothing attached: drawn out everywhere; an isolated vertex too.
+        assert!(
+            render_weights(16, &triangles, &[])
+                .iter()
+                .all(|&x| x == 1.0)
+        );
+    }
 
     #[test]
     fn fit_to_anchors_leaves_every_anchor_a_skin_outside() {
