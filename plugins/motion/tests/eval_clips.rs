@@ -38,6 +38,8 @@ fn our_filter_beats_holt_and_one_euro_and_the_output_is_clean() {
     let skeleton = common::skeleton();
     let mut wins = 0;
     let (mut skate_in, mut skate_out) = (0.0f32, 0.0f32);
+    // The noisy Kinect skeleton's own foot points (before retargeting), for comparison.
+    let mut skate_sensor = 0.0f32;
     let mut violations = 0;
     // Mean over the clips whose noisy input skates at all of output / input, and the skating
     // of the clean clip itself (retargeted without noise or correction).
@@ -70,6 +72,7 @@ fn our_filter_beats_holt_and_one_euro_and_the_output_is_clean() {
             && ours.output.lag_ms <= holt.output.lag_ms.max(euro.output.lag_ms) + 33.0;
         wins += usize::from(win);
         skate_in += ours.avatar_foot_skate_input;
+        skate_sensor += ours.input.foot_skate_ratio as f32;
         skate_out += ours.avatar_foot_skate_output;
         violations += ours.joint_limit_violations;
         println!(
@@ -108,6 +111,11 @@ fn our_filter_beats_holt_and_one_euro_and_the_output_is_clean() {
         100.0 * ratio_sum / ratio_clips.max(1) as f32,
         skate_clean / 15.0,
         100.0 * skate_clean / skate_in.max(1e-6)
+    );
+    println!(
+        "the noisy Kinect skeleton's own foot points skate {:.3}; the output is {:.0}% of that",
+        skate_sensor / 15.0,
+        100.0 * skate_out / skate_sensor.max(1e-6)
     );
     assert!(wins >= 12, "our filter is better on only {wins}/15 clips");
     // The line: the corrected output skates at most 20% as much as the noisy input
