@@ -139,9 +139,9 @@ pub const RENDER_OFFSET_M: f32 = 0.025;
 /// Edges over which that offset blends in from the attached part.
 pub const RENDER_RAMP_EDGES: u32 = 4;
 
-/// Per vertex: `min(1, edges to the nearest attached vertex / RENDER_RAMP_EDGES)` (1 without
-/// attached vertices).
-fn render_weights(n: usize, triangles: &[[u32; 3]], attached: &[u32]) -> Vec<f32> {
+/// Per vertex of an `n`-vertex mesh: its neighbours along the triangles' edges, sorted, once
+/// each (indices out of range are skipped).
+fn vertex_neighbours(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
     let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
     for t in triangles {
         for k in 0..3 {
@@ -152,6 +152,17 @@ fn render_weights(n: usize, triangles: &[[u32; 3]], attached: &[u32]) -> Vec<f32
             }
         }
     }
+    for list in &mut neighbours {
+        list.sort_unstable();
+        list.dedup();
+    }
+    neighbours
+}
+
+/// Per vertex: `min(1, edges to the nearest attached vertex / RENDER_RAMP_EDGES)` (1 without
+/// attached vertices).
+fn render_weights(n: usize, triangles: &[[u32; 3]], attached: &[u32]) -> Vec<f32> {
+    let neighbours = vertex_neighbours(n, triangles);
     let mut hops = vec![u32::MAX; n];
     let mut queue = std::collections::VecDeque::new();
     for &a in attached {
@@ -258,20 +269,7 @@ fn smooth_skin(
             }
         }
     }
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
-            if a < n && b < n {
-                neighbours[a].push(b as u32);
-                neighbours[b].push(a as u32);
-            }
-        }
-    }
-    for list in &mut neighbours {
-        list.sort_unstable();
-        list.dedup();
-    }
+    let neighbours = vertex_neighbours(n, triangles);
     let mut next = dense.clone();
     for _ in 0..passes {
         for v in 0..n {
