@@ -3,9 +3,9 @@
 //! garments the kiosk ships. After every 120 Hz step: no NaN, no simulated particle more than
 //! 5 mm inside a body collider, no tether past 110 % of its rest length, no blow-up reset.
 //!
-//! Not met, and therefore not run here: the T-shirt with the arms through the torso (its
-//! body is pinched between the arm and trunk colliders and tears: stretch resets from the
-//! first swing). The T-shirt is checked for the teleport and the spin.
+//! Not met, and therefore not run here: the T-shirt with the arms through the chest (its body
+//! is pinched between the arm and trunk colliders and tears: stretch resets from the first
+//! swing). The T-shirt is checked for the teleport and the spin.
 
 use fitroom::cloth_cli::{STEP_HZ, load_garment};
 use fitroom_body::{BodyModel, Shape};
