@@ -41,6 +41,18 @@ pub struct ClothMesh {
     triangles: Vec<[u32; 3]>,
 }
 
+/// Two triangles of the quad `[a, b, c, d]` (counter-clockwise), split along `a-c` or, for
+/// alternate quads, along `b-d` (a grid without a preferred diagonal).
+fn push_quad(triangles: &mut Vec<[u32; 3]>, [a, b, c, d]: [u32; 4], along_ac: bool) {
+    if along_ac {
+        triangles.push([a, b, c]);
+        triangles.push([a, c, d]);
+    } else {
+        triangles.push([a, b, d]);
+        triangles.push([b, c, d]);
+    }
+}
+
 impl ClothMesh {
     /// Validates and wraps a mesh: at least one triangle, finite positions, indices in range,
     /// no repeated vertex in a triangle and no zero-area triangle.
@@ -124,16 +136,11 @@ impl ClothMesh {
         for j in 0..cells_v {
             for i in 0..cells_u {
                 let a = j * nu + i;
-                let b = a + 1;
-                let c = a + nu + 1;
-                let d = a + nu;
-                if (i + j) % 2 == 0 {
-                    triangles.push([a, b, c]);
-                    triangles.push([a, c, d]);
-                } else {
-                    triangles.push([a, b, d]);
-                    triangles.push([b, c, d]);
-                }
+                push_quad(
+                    &mut triangles,
+                    [a, a + 1, a + nu + 1, a + nu],
+                    (i + j) % 2 == 0,
+                );
             }
         }
         Self::new(positions, triangles)
@@ -178,17 +185,13 @@ impl ClothMesh {
         for j in 0..rows {
             for i in 0..around {
                 let i1 = (i + 1) % around;
-                let a = j * around + i;
-                let b = j * around + i1;
-                let c = (j + 1) * around + i1;
-                let d = (j + 1) * around + i;
-                if (i + j) % 2 == 0 {
-                    triangles.push([a, b, c]);
-                    triangles.push([a, c, d]);
-                } else {
-                    triangles.push([a, b, d]);
-                    triangles.push([b, c, d]);
-                }
+                let quad = [
+                    j * around + i,
+                    j * around + i1,
+                    (j + 1) * around + i1,
+                    (j + 1) * around + i,
+                ];
+                push_quad(&mut triangles, quad, (i + j) % 2 == 0);
             }
         }
         Self::new(positions, triangles)

@@ -1272,19 +1272,9 @@ impl StepContext<'_> {
                         self.k.inv_h2,
                         first,
                     ),
-                    RunKind::FlatBend => solve_bend(
+                    RunKind::FlatBend | RunKind::CurvedBend => solve_bend(
                         self.k.isa,
-                        false,
-                        &c.bend[a..b],
-                        &self.bend_inverse[a..b],
-                        keep.then_some((&self.bend_lambda, a)),
-                        x,
-                        self.k.bend_alpha,
-                        first,
-                    ),
-                    RunKind::CurvedBend => solve_bend(
-                        self.k.isa,
-                        true,
+                        run.kind == RunKind::CurvedBend,
                         &c.bend[a..b],
                         &self.bend_inverse[a..b],
                         keep.then_some((&self.bend_lambda, a)),

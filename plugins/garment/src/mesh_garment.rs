@@ -101,32 +101,20 @@ fn finish(
             kept += 1;
         }
     }
-    let pick = |v: usize| used[v];
-    let positions: Vec<Vec3> = positions
-        .iter()
-        .enumerate()
-        .filter(|(v, _)| pick(*v))
-        .map(|(_, p)| *p)
-        .collect();
-    let attached_mask: Vec<bool> = attached_mask
-        .iter()
-        .enumerate()
-        .filter(|(v, _)| pick(*v))
-        .map(|(_, a)| *a)
-        .collect();
-    let panel_of_vertex: Vec<u16> = panel_of_vertex
-        .iter()
-        .enumerate()
-        .filter(|(v, _)| pick(*v))
-        .map(|(_, a)| *a)
-        .collect();
-    let rest_2d: Vec<Vec2> = if rest_2d.len() == used.len() {
-        rest_2d
+    // The values of the used vertices, in order.
+    fn used_values<T: Copy>(values: &[T], used: &[bool]) -> Vec<T> {
+        values
             .iter()
-            .enumerate()
-            .filter(|(v, _)| pick(*v))
-            .map(|(_, a)| *a)
+            .zip(used)
+            .filter(|(_, u)| **u)
+            .map(|(v, _)| *v)
             .collect()
+    }
+    let positions = used_values(&positions, &used);
+    let attached_mask = used_values(&attached_mask, &used);
+    let panel_of_vertex = used_values(&panel_of_vertex, &used);
+    let rest_2d: Vec<Vec2> = if rest_2d.len() == used.len() {
+        used_values(&rest_2d, &used)
     } else {
         Vec::new()
     };
