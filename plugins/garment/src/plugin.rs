@@ -164,8 +164,11 @@ fn skinning(body: &AvatarBody, joints: &Query<(&AvatarJoint, &GlobalTransform)>)
     out
 }
 
-fn garment_mesh(positions: &[Vec3], triangles: &[[u32; 3]], colours: Option<&[f32]>) -> Mesh {
-    let normals = fitroom_body::rig::compute_normals(positions, triangles);
+fn garment_mesh(
+    (positions, normals): (Vec<Vec3>, Vec<Vec3>),
+    triangles: &[[u32; 3]],
+    colours: Option<&[f32]>,
+) -> Mesh {
     let mut mesh = Mesh::new(
         PrimitiveTopology::TriangleList,
         RenderAssetUsages::default(),
@@ -295,7 +298,7 @@ fn load_garment(
         });
         return;
     };
-    let mesh = meshes.add(garment_mesh(&sim.render_positions(), sim.triangles(), None));
+    let mesh = meshes.add(garment_mesh(sim.render_surface(), sim.triangles(), None));
     commands.spawn((
         WornGarment {
             sim: Box::new(sim),
@@ -381,11 +384,7 @@ fn step_garment(
             && let Some(mut mesh) = meshes.get_mut(&g.mesh)
         {
             let strain = settings.fit_map.then(|| g.sim.strain_pct());
-            *mesh = garment_mesh(
-                &g.sim.render_positions(),
-                g.sim.triangles(),
-                strain.as_deref(),
-            );
+            *mesh = garment_mesh(g.sim.render_surface(), g.sim.triangles(), strain.as_deref());
         }
         status.frame_ms = start.elapsed().as_secs_f32() * 1e3;
     }

@@ -514,16 +514,11 @@ impl GarmentSim {
         (posed, shrink)
     }
 
-    /// The solver's spheres and capsules, and the largest shrink of [`fit_to_anchors`].
-    fn colliders(
-        &self,
-        skinning: &[Affine3A],
-        anchors: &[Vec3],
-    ) -> (Vec<Sphere>, Vec<[u32; 2]>, f32) {
-        let mut spheres = Vec::new();
-        let mut capsules = Vec::new();
-        let (posed, shrink) = self.posed_colliders(skinning, anchors);
-        for (a, b, ra, rb) in posed {
+    /// Gives the solver `posed` colliders as spheres and the capsules joining them.
+    fn set_solver_colliders(&mut self, posed: &[(Vec3, Vec3, f32, f32)]) -> Result<(), SimError> {
+        let mut spheres = Vec::with_capacity(2 * posed.len());
+        let mut capsules = Vec::with_capacity(posed.len());
+        for &(a, b, ra, rb) in posed {
             let i = spheres.len() as u32;
             spheres.push(Sphere::new(a, ra));
             if a.distance(b) > 1e-6 {
@@ -531,7 +526,8 @@ impl GarmentSim {
                 capsules.push([i, i + 1]);
             }
         }
-        (spheres, capsules, shrink)
+        self.solver.set_colliders(&spheres, &capsules)?;
+        Ok(())
     }
 
     fn anchors(&self, skinning: &[Affine3A]) -> Vec<Vec3> {
@@ -541,7 +537,7 @@ impl GarmentSim {
             .collect()
     }
 
-    /// Puts the garment in its skinned pose, at rest, with the colliders where they are.
+    /// Puts the garment on the body posed by `skinning`, at rest.
     ///
     /// The garment is put on as it was placed: in the body's rest pose carried rigidly by the
     /// pelvis, then the limbs move into `skinning` over [`DRESS_STEPS`] simulated steps, so
@@ -562,9 +558,10 @@ impl GarmentSim {
                     .zip(skinning)
                     .map(|(a, b)| lerp_affine(a, b, t))
                     .collect();
-                self.solver.set_attachment_targets(&self.anchors(&pose))?;
-                let (spheres, capsules, _) = self.colliders(&pose, &self.anchors(&pose));
-                self.solver.set_colliders(&spheres, &capsules)?;
+                let anchors = self.anchors(&pose);
+                self.solver.set_attachment_targets(&anchors)?;
+                let (posed, _) = self.posed_colliders(&pose, &anchors);
+                self.set_solver_colliders(&posed)?;
                 if !self.solver.step(DRESS_DT)?.is_healthy() {
                     healthy = false;
                     break;
@@ -581,8 +578,8 @@ impl GarmentSim {
     fn place(&mut self, skinning: &[Affine3A]) -> Result<(), SimError> {
         let skinned = self.skinned(skinning);
         self.solver.reset_to(&skinned)?;
-        let (spheres, capsules, _) = self.colliders(skinning, &self.anchors(skinning));
-        self.solver.set_colliders(&spheres, &capsules)?;
+        let (posed, _) = self.posed_colliders(skinning, &self.anchors(skinning));
+        self.set_solver_colliders(&posed)?;
         self.solver.teleport_colliders();
         Ok(())
     }
@@ -606,8 +603,8 @@ impl GarmentSim {
         }
         self.last_targets = Some(targets.clone());
         self.solver.set_attachment_targets(&targets)?;
-        let (spheres, capsules, collider_shrink_m) = self.colliders(skinning, &targets);
-        self.solver.set_colliders(&spheres, &capsules)?;
+        let (posed, collider_shrink_m) = self.posed_colliders(skinning, &targets);
+        self.set_solver_colliders(&posed)?;
         let report: StepReport = self.solver.step(dt)?;
         let mut reset = false;
         let mut blow_up = None;
@@ -620,7 +617,7 @@ impl GarmentSim {
         let solve_ms = start.elapsed().as_secs_f64() * 1e3;
         let (max_penetration_m, max_strain_pct) = if self.measuring {
             (
-                self.max_penetration(skinning),
+                self.deepest(&posed),
                 self.strain_pct().into_iter().fold(0.0, f32::max),
             )
         } else {
@@ -637,24 +634,19 @@ impl GarmentSim {
         })
     }
 
-    /// Where to draw the garment: its positions, the simulated part drawn
+    /// Where to draw the garment, and its normals: its positions, the simulated part drawn
     /// [`RENDER_OFFSET_M`] out along its normals (see there), blending in over
-    /// [`RENDER_RAMP_EDGES`] edges from the attached part, which is drawn where it is.
-    pub fn render_positions(&self) -> Vec<Vec3> {
-        let positions = self.positions();
+    /// [`RENDER_RAMP_EDGES`] edges from the attached part, which is drawn where it is. The
+    /// normals are those of the simulated surface (the offset one is parallel to it).
+    pub fn render_surface(&self) -> (Vec<Vec3>, Vec<Vec3>) {
+        let mut positions = self.positions();
         let normals = fitroom_body::rig::compute_normals(&positions, &self.triangles);
-        positions
-            .iter()
-            .zip(&normals)
-            .zip(&self.render_weight)
-            .map(|((&p, &n), &w)| {
-                if n.is_finite() {
-                    p + n * (w * RENDER_OFFSET_M)
-                } else {
-                    p
-                }
-            })
-            .collect()
+        for ((p, &n), &w) in positions.iter_mut().zip(&normals).zip(&self.render_weight) {
+            if n.is_finite() {
+                *p += n * (w * RENDER_OFFSET_M);
+            }
+        }
+        (positions, normals)
     }
 
     /// The garment's current positions.
@@ -715,7 +707,16 @@ impl GarmentSim {
 
     /// Per vertex: distance to the posed body colliders' surface, metres (negative inside).
     pub fn gap_m(&self, skinning: &[Affine3A]) -> Vec<f32> {
-        let (posed, _) = self.posed_colliders(skinning, &self.anchors(skinning));
+        self.gaps(&self.posed_colliders(skinning, &self.anchors(skinning)).0)
+    }
+
+    /// Deepest simulated (free) particle inside a collider, metres (0 if none). Attached
+    /// particles are where the skinned body puts them, not the solver.
+    pub fn max_penetration(&self, skinning: &[Affine3A]) -> f32 {
+        self.deepest(&self.posed_colliders(skinning, &self.anchors(skinning)).0)
+    }
+
+    fn gaps(&self, posed: &[(Vec3, Vec3, f32, f32)]) -> Vec<f32> {
         self.solver
             .positions()
             .iter()
@@ -728,10 +729,8 @@ impl GarmentSim {
             .collect()
     }
 
-    /// Deepest simulated (free) particle inside a collider, metres (0 if none). Attached
-    /// particles are where the skinned body puts them, not the solver.
-    pub fn max_penetration(&self, skinning: &[Affine3A]) -> f32 {
-        self.gap_m(skinning)
+    fn deepest(&self, posed: &[(Vec3, Vec3, f32, f32)]) -> f32 {
+        self.gaps(posed)
             .into_iter()
             .enumerate()
             .filter(|(i, _)| self.attached.binary_search(&(*i as u32)).is_err())
