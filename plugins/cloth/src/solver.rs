@@ -65,7 +65,9 @@ use std::time::Instant;
 use glam::{Vec3, Vec3A};
 
 use crate::collision::{MAX_COLLIDERS, Plane, Shape, Sphere, SweptCollider, collide_plane};
-use crate::constraints::{ConstraintSet, RunKind, max_stretch_squared, solve_bend, solve_distance};
+use crate::constraints::{
+    BendFrame, BendTarget, ConstraintSet, RunKind, max_stretch_squared, solve_bend, solve_distance,
+};
 use crate::error::{ClothError, non_negative, positive};
 use crate::fabric::Fabric;
 use crate::frame::{FrameInertia, FrameMotion, FrameState, RigidPose};
@@ -344,6 +346,8 @@ enum Phase {
     Separators {
         level: u32,
         first: bool,
+        /// The first constraint pass of the step: curved bending stencils take a new frame.
+        new_frame: bool,
     },
     /// Per block: finish the last substep, check health and stretch, write the mesh-ordered
     /// copies.
@@ -414,6 +418,9 @@ pub struct ClothSolver {
     /// Inverse XPBD denominators per batch, for substeps with `1/h² = inverse_for_inv_h2`.
     distance_inverse: Vec<[f32; LANES]>,
     bend_inverse: Vec<[f32; LANES]>,
+    /// Per bending batch: the curved stencils' targets, taken at the step's first constraint
+    /// pass and held over its substeps.
+    bend_targets: Vec<BendTarget>,
     inverse_for_inv_h2: f32,
     target_start: Vec<Vec3A>,
     target_end: Vec<Vec3A>,
@@ -598,6 +605,7 @@ impl ClothSolver {
             bend_lambda: vec![[[0.0; LANES]; 3]; if keep_lambda { bend_batches } else { 0 }],
             distance_inverse: Vec::new(),
             bend_inverse: Vec::new(),
+            bend_targets: vec![BendTarget::default(); bend_batches],
             inverse_for_inv_h2: f32::NAN,
             target_start: targets.clone(),
             target_end: targets,
@@ -1038,6 +1046,7 @@ impl ClothSolver {
                         Phase::Separators {
                             level: level as u32,
                             first: iteration == 0,
+                            new_frame: sub == 0 && iteration == 0,
                         },
                         b - a,
                     );
@@ -1072,6 +1081,7 @@ impl ClothSolver {
                 bend_lambda: SharedSlice::new(&mut self.bend_lambda),
                 distance_inverse: &self.distance_inverse,
                 bend_inverse: &self.bend_inverse,
+                bend_targets: SharedSlice::new(&mut self.bend_targets),
                 block_health: SharedSlice::new(&mut self.block_health),
                 stretch_health: SharedSlice::new(&mut self.stretch_health),
             };
@@ -1227,6 +1237,7 @@ struct StepContext<'a> {
     bend_lambda: SharedSlice<'a, [[f32; LANES]; 3]>,
     distance_inverse: &'a [[f32; LANES]],
     bend_inverse: &'a [[f32; LANES]],
+    bend_targets: SharedSlice<'a, BendTarget>,
     block_health: SharedSlice<'a, ItemHealth>,
     stretch_health: SharedSlice<'a, (f32, u32)>,
 }
@@ -1238,20 +1249,25 @@ impl StepContext<'_> {
             Phase::AeroTriangles => self.aero_triangles(item),
             Phase::Block { sub } => {
                 self.block_particles(sub, item);
-                self.solve(item, true);
+                self.solve(item, true, sub == 0);
             }
-            Phase::BlockIteration => self.solve(item, false),
-            Phase::Separators { level, first } => {
+            Phase::BlockIteration => self.solve(item, false, false),
+            Phase::Separators {
+                level,
+                first,
+                new_frame,
+            } => {
                 let (a, _) = self.model.constraints.separator_levels[level as usize];
-                self.solve(a as usize + item, first);
+                self.solve(a as usize + item, first, new_frame);
             }
             Phase::Finish => self.finish_block(item),
             Phase::SeparatorStretch => self.stretch(self.model.order.blocks() + item),
         }
     }
 
-    /// Projects the constraints of item `item` once.
-    fn solve(&self, item: usize, first: bool) {
+    /// Projects the constraints of item `item` once; `new_frame`: the curved bending
+    /// stencils take their frame from the current positions (else they keep the last one).
+    fn solve(&self, item: usize, first: bool, new_frame: bool) {
         let c = &self.model.constraints;
         let (r0, r1) = c.items[item].runs;
         let keep = self.k.keep_lambda;
@@ -1274,7 +1290,11 @@ impl StepContext<'_> {
                     ),
                     RunKind::FlatBend | RunKind::CurvedBend => solve_bend(
                         self.k.isa,
-                        run.kind == RunKind::CurvedBend,
+                        match (run.kind, new_frame) {
+                            (RunKind::FlatBend, _) => BendFrame::Flat,
+                            (_, true) => BendFrame::New(&self.bend_targets, a),
+                            (_, false) => BendFrame::Held(&self.bend_targets, a),
+                        },
                         &c.bend[a..b],
                         &self.bend_inverse[a..b],
                         keep.then_some((&self.bend_lambda, a)),
