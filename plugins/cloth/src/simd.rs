@@ -12,14 +12,12 @@
 //! one AVX register, chosen at run time (`Isa::detect`). Only IEEE-754 additions,
 //! multiplications, divisions and square roots are used — no fused multiply-add, no
 //! approximate reciprocals — each rounded exactly once, so every implementation gives the
-//! same bits. A four-lane SSE2 type (`F4`) serves the aerodynamics.
+//! same bits. The baseline's eight lanes are two four-lane SSE2 halves (`F4`).
 
 use std::ops::{Add, Mul, Neg, Sub};
 
 use glam::Vec3A;
 
-/// Lanes of [`F4`].
-pub(crate) const LANES4: usize = 4;
 /// Lanes of a constraint batch ([`Lanes`]).
 pub(crate) const LANES: usize = 8;
 
@@ -85,16 +83,6 @@ mod imp {
         pub fn not_gt(self, o: Self) -> M4 {
             M4(unsafe { _mm_cmpngt_ps(self.0, o.0) })
         }
-        /// `self < o` (false when either is NaN).
-        #[inline(always)]
-        pub fn lt(self, o: Self) -> M4 {
-            M4(unsafe { _mm_cmplt_ps(self.0, o.0) })
-        }
-        /// Lane-wise maximum (`o` when either is NaN).
-        #[inline(always)]
-        pub fn max(self, o: Self) -> Self {
-            Self(unsafe { _mm_max_ps(self.0, o.0) })
-        }
         /// `self != self`.
         #[inline(always)]
         pub fn is_nan(self) -> M4 {
@@ -129,10 +117,6 @@ mod imp {
     }
 
     impl M4 {
-        #[inline(always)]
-        pub fn and(self, o: Self) -> Self {
-            Self(unsafe { _mm_and_ps(self.0, o.0) })
-        }
         #[inline(always)]
         pub fn or(self, o: Self) -> Self {
             Self(unsafe { _mm_or_ps(self.0, o.0) })
@@ -366,115 +350,6 @@ impl Neg for F4 {
     }
 }
 
-/// Four 3-vectors, one per lane.
-#[derive(Clone, Copy, Debug)]
-pub(crate) struct V4 {
-    pub x: F4,
-    pub y: F4,
-    pub z: F4,
-}
-
-impl V4 {
-    #[inline(always)]
-    pub fn scale(self, s: F4) -> V4 {
-        V4 {
-            x: self.x * s,
-            y: self.y * s,
-            z: self.z * s,
-        }
-    }
-    #[inline(always)]
-    pub fn dot(self, o: V4) -> F4 {
-        self.x * o.x + self.y * o.y + self.z * o.z
-    }
-    #[inline(always)]
-    pub fn cross(self, o: V4) -> V4 {
-        V4 {
-            x: self.y * o.z - self.z * o.y,
-            y: self.z * o.x - self.x * o.z,
-            z: self.x * o.y - self.y * o.x,
-        }
-    }
-    /// The same vector in every lane.
-    #[inline(always)]
-    pub fn splat(v: Vec3A) -> V4 {
-        V4 {
-            x: F4::splat(v.x),
-            y: F4::splat(v.y),
-            z: F4::splat(v.z),
-        }
-    }
-    /// Lanes from vectors.
-    #[inline(always)]
-    pub fn from_lanes(v: [Vec3A; LANES4]) -> V4 {
-        V4 {
-            x: F4::load(&v.map(|v| v.x)),
-            y: F4::load(&v.map(|v| v.y)),
-            z: F4::load(&v.map(|v| v.z)),
-        }
-    }
-    /// The lanes as vectors.
-    #[inline(always)]
-    pub fn lanes(self) -> [Vec3A; LANES4] {
-        let (x, y, z) = (self.x.to_array(), self.y.to_array(), self.z.to_array());
-        std::array::from_fn(|l| Vec3A::new(x[l], y[l], z[l]))
-    }
-    /// Lanes of `self` where `mask`, zero elsewhere.
-    #[inline(always)]
-    pub fn and(self, mask: M4) -> V4 {
-        V4 {
-            x: self.x.and(mask),
-            y: self.y.and(mask),
-            z: self.z.and(mask),
-        }
-    }
-}
-
-impl Add for V4 {
-    type Output = V4;
-    #[inline(always)]
-    fn add(self, o: V4) -> V4 {
-        V4 {
-            x: self.x + o.x,
-            y: self.y + o.y,
-            z: self.z + o.z,
-        }
-    }
-}
-
-impl Sub for V4 {
-    type Output = V4;
-    #[inline(always)]
-    fn sub(self, o: V4) -> V4 {
-        V4 {
-            x: self.x - o.x,
-            y: self.y - o.y,
-            z: self.z - o.z,
-        }
-    }
-}
-
-/// Loads the positions `x[index[l]]` into lanes.
-///
-/// # Safety
-/// Every index is in bounds of the allocation `x` points into, and no other thread writes
-/// those elements during the current phase.
-#[inline(always)]
-pub(crate) unsafe fn gather4(x: *const Vec3A, index: &[u32; LANES4]) -> V4 {
-    let [x_, y, z] = unsafe { imp::gather4(index.map(|i| x.add(i as usize))) };
-    V4 { x: x_, y, z }
-}
-
-/// Stores lanes to `x[index[l]]` (w = 0).
-///
-/// # Safety
-/// As [`gather`], and no other thread reads those elements during the current phase. If an
-/// index repeats, the last lane wins.
-#[inline(always)]
-pub(crate) unsafe fn scatter4(x: *mut Vec3A, index: &[u32; LANES4], v: V4) {
-    unsafe { imp::scatter4(index.map(|i| x.add(i as usize)), [v.x, v.y, v.z]) }
-}
-
 /// Eight `f32` lanes: the lane type of the constraint kernels, which are written once,
 /// generically, and compiled for each implementation ([`Sse8`] everywhere on x86-64, [`Avx8`]
 /// where the processor has AVX, [`Scalar8`] elsewhere). Masks are lanes with all bits set
@@ -578,6 +453,15 @@ impl<L: Lanes> V3<L> {
             x: L::select(mask, a.x, b.x),
             y: L::select(mask, a.y, b.y),
             z: L::select(mask, a.z, b.z),
+        }
+    }
+    /// The same vector in every lane.
+    #[inline(always)]
+    pub fn splat(v: Vec3A) -> Self {
+        V3 {
+            x: L::splat(v.x),
+            y: L::splat(v.y),
+            z: L::splat(v.z),
         }
     }
     /// Lanes of `self` where `mask`, zero elsewhere.
@@ -1068,24 +952,24 @@ mod tests {
 
     #[test]
     fn gather_and_scatter_transpose_exactly() {
-        let mut x: Vec<Vec3A> = (0..8)
+        let x: Vec<Vec3A> = (0..8)
             .map(|k| Vec3A::new(k as f32, 10.0 + k as f32, 20.0 + k as f32))
             .collect();
-        let index = [5, 0, 7, 2];
-        let v = unsafe { gather4(x.as_ptr(), &index) };
-        assert_eq!(v.x.to_array(), [5.0, 0.0, 7.0, 2.0]);
-        assert_eq!(v.y.to_array(), [15.0, 10.0, 17.0, 12.0]);
-        assert_eq!(v.z.to_array(), [25.0, 20.0, 27.0, 22.0]);
-        let w = V4 {
-            x: v.x * F4::splat(2.0),
+        let index8 = [5, 0, 7, 2, 1, 3, 6, 4];
+        let offset8 = index8.map(offset);
+        let v = unsafe { Baseline8::gather(x.as_ptr(), &offset8) };
+        assert_eq!(v.x.to_array(), index8.map(|i| i as f32));
+        assert_eq!(v.y.to_array(), index8.map(|i| 10.0 + i as f32));
+        assert_eq!(v.z.to_array(), index8.map(|i| 20.0 + i as f32));
+        let w = V3 {
+            x: v.x * Baseline8::splat(2.0),
             y: v.y,
             z: -v.z,
         };
-        unsafe { scatter4(x.as_mut_ptr(), &index, w) };
-        assert_eq!(x[7], Vec3A::new(14.0, 17.0, -27.0));
-        assert_eq!(x[1], Vec3A::new(1.0, 11.0, 21.0));
-        let index8 = [5, 0, 7, 2, 1, 3, 6, 4];
-        let offset8 = index8.map(offset);
+        let mut scattered = x.clone();
+        unsafe { Baseline8::scatter(scattered.as_mut_ptr(), &offset8, w) };
+        assert_eq!(scattered[7], Vec3A::new(14.0, 17.0, -27.0));
+        assert_eq!(scattered[1], Vec3A::new(2.0, 11.0, -21.0));
         let eight = |v: V3<Baseline8>| v.to_arrays();
         let g = unsafe { Baseline8::gather(x.as_ptr(), &offset8) };
         assert_eq!(eight(g)[0], index8.map(|i| x[i as usize].x));

@@ -76,8 +76,8 @@ use crate::order::ParticleOrder;
 use crate::pool::{PhaseCounters, SharedSlice, WorkerPool};
 #[cfg(target_arch = "x86_64")]
 use crate::simd::Avx8;
-use crate::simd::{Baseline8, F4, Isa, LANES, LANES4, Lanes, V3, V4, gather4, offset, scatter4};
-use crate::wind::{Wind, triangle_force, triangle_force4};
+use crate::simd::{Baseline8, Isa, LANES, Lanes, V3, offset};
+use crate::wind::{Wind, triangle_force, triangle_force_lanes};
 
 /// Triangles per aerodynamics work item.
 const TRIANGLE_ITEM: usize = 1024;
@@ -1404,40 +1404,13 @@ impl StepContext<'_> {
         let lo = item * TRIANGLE_ITEM;
         let hi = (lo + TRIANGLE_ITEM).min(tris.len());
         let k = &self.k;
-        let third = F4::splat(1.0 / 3.0);
         let mut t = lo;
-        // Four triangles at a time.
-        while t + LANES4 <= hi {
-            let corner = |c: usize| -> [u32; LANES4] { std::array::from_fn(|l| tris[t + l][c]) };
-            let corners = [corner(0), corner(1), corner(2)];
+        // Eight triangles at a time.
+        while t + LANES <= hi {
             // SAFETY: positions and velocities are only read in this phase; the force slots
-            // of triangles `t..t + 4` belong to this item.
-            unsafe {
-                let p = corners.map(|c| gather4(self.xs.as_ptr(), &c));
-                let v = corners.map(|c| gather4(self.vs.as_ptr(), &c));
-                let mut relative = (v[0] + v[1] + v[2]).scale(third);
-                let centroid = (p[0] + p[1] + p[2]).scale(third);
-                if let Some(f) = &k.frame {
-                    relative = relative
-                        + V4::splat(f.air_velocity)
-                        + V4::splat(f.air_omega).cross(centroid);
-                }
-                if let Some(wind) = self.wind {
-                    let (pose, to_local) = match &k.frame {
-                        Some(f) => (f.motion.pose, f.motion.to_local),
-                        None => (RigidPose::IDENTITY, glam::Quat::IDENTITY),
-                    };
-                    let air = centroid.lanes().map(|c| {
-                        let world = pose.transform_point(Vec3::from(c));
-                        Vec3A::from(to_local * wind.velocity(world, k.time))
-                    });
-                    relative = relative - V4::from_lanes(air);
-                }
-                let force = triangle_force4(p, relative, k.air_density, k.drag, k.lift);
-                let index: [u32; LANES4] = std::array::from_fn(|l| (t + l) as u32);
-                scatter4(self.triangle_force.as_ptr(), &index, force);
-            }
-            t += LANES4;
+            // of triangles `t..t + 8` belong to this item.
+            unsafe { aero8(k.isa, self, t) };
+            t += LANES;
         }
         for (t, tri) in tris.iter().enumerate().take(hi).skip(t) {
             // SAFETY: as above, for triangle `t`.
@@ -2107,6 +2080,79 @@ fn project_on_two_balls_lanes<L: Lanes>(
         fallback |= !circle_ok.or(settled).bits() & ALL;
     }
     (V3::select(inside, p, q), fallback)
+}
+
+/// The aerodynamic forces of triangles `t..t + 8` ([`StepContext::aero_triangles`]).
+///
+/// # Safety
+/// Positions and velocities are only read in this phase, and the force slots of these
+/// triangles belong to the calling item.
+unsafe fn aero8(isa: Isa, context: &StepContext<'_>, t: usize) {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn avx(context: &StepContext<'_>, t: usize) {
+        // SAFETY: the caller's contract.
+        unsafe { aero_with::<Avx8>(context, t) }
+    }
+    // SAFETY: the caller's contract; AVX only where detected.
+    unsafe {
+        match isa {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx => avx(context, t),
+            _ => aero_with::<Baseline8>(context, t),
+        }
+    }
+}
+
+#[inline(always)]
+unsafe fn aero_with<L: Lanes>(context: &StepContext<'_>, t: usize) {
+    let k = &context.k;
+    let tris = &context.model.triangles[t..t + LANES];
+    let mut corners = [[0u32; LANES]; 3];
+    for (l, tri) in tris.iter().enumerate() {
+        for c in 0..3 {
+            corners[c][l] = offset(tri[c]);
+        }
+    }
+    let (xs, vs) = (context.xs.as_ptr(), context.vs.as_ptr());
+    // SAFETY: the caller's contract. (No closures here: they would not inherit the caller's
+    // target features.)
+    unsafe {
+        let p = [
+            L::gather(xs, &corners[0]),
+            L::gather(xs, &corners[1]),
+            L::gather(xs, &corners[2]),
+        ];
+        let third = L::splat(1.0 / 3.0);
+        let mut relative =
+            (L::gather(vs, &corners[0]) + L::gather(vs, &corners[1]) + L::gather(vs, &corners[2]))
+                .scale(third);
+        let centroid = (p[0] + p[1] + p[2]).scale(third);
+        if let Some(f) = &k.frame {
+            relative =
+                relative + V3::splat(f.air_velocity) + V3::splat(f.air_omega).cross(centroid);
+        }
+        if let Some(wind) = context.wind {
+            let (pose, to_local) = match &k.frame {
+                Some(f) => (f.motion.pose, f.motion.to_local),
+                None => (RigidPose::IDENTITY, glam::Quat::IDENTITY),
+            };
+            let c = centroid.to_arrays();
+            let mut air = [[0.0f32; LANES]; 3];
+            for l in 0..LANES {
+                let world = pose.transform_point(Vec3::new(c[0][l], c[1][l], c[2][l]));
+                let a = to_local * wind.velocity(world, k.time);
+                (air[0][l], air[1][l], air[2][l]) = (a.x, a.y, a.z);
+            }
+            relative = relative - V3::load(&air);
+        }
+        let force = triangle_force_lanes(p, relative, k.air_density, k.drag, k.lift);
+        let mut slots = [0u32; LANES];
+        for (l, slot) in slots.iter_mut().enumerate() {
+            *slot = offset((t + l) as u32);
+        }
+        L::scatter(context.triangle_force.as_ptr(), &slots, force);
+    }
 }
 
 /// The velocity of substep `s` and the prediction of substep `s + 1` for eight consecutive

@@ -21,7 +21,7 @@
 
 use glam::{Vec3, Vec3A};
 
-use crate::simd::{F4, V4};
+use crate::simd::{Lanes, V3};
 
 /// Number of noise samples per component (the gust pattern repeats after this many periods).
 const TABLE: usize = 256;
@@ -144,40 +144,42 @@ pub(crate) fn triangle_force(
     force
 }
 
-/// [`triangle_force`] for four triangles at once (one per lane).
+/// [`triangle_force`] for eight triangles at once (one per lane).
 #[inline(always)]
-pub(crate) fn triangle_force4(
-    corners: [V4; 3],
-    relative_velocity: V4,
+pub(crate) fn triangle_force_lanes<L: Lanes>(
+    corners: [V3<L>; 3],
+    relative_velocity: V3<L>,
     air_density: f32,
     drag: f32,
     lift: f32,
-) -> V4 {
+) -> V3<L> {
     let area_normal = (corners[1] - corners[0]).cross(corners[2] - corners[0]);
     let doubled_area = area_normal.dot(area_normal).sqrt();
     let speed = relative_velocity.dot(relative_velocity).sqrt();
+    let zero = L::splat(0.0);
     let valid = doubled_area
-        .not_lt(F4::splat(1e-12))
-        .and(speed.not_lt(F4::splat(1e-6)))
-        .and(speed.lt(F4::splat(f32::INFINITY)));
-    let one = F4::splat(1.0);
+        .not_lt(L::splat(1e-12))
+        .and(speed.not_lt(L::splat(1e-6)))
+        .and(L::splat(f32::INFINITY).gt(speed));
+    let one = L::splat(1.0);
     let n = area_normal.scale(one.div(doubled_area));
     let u = relative_velocity.scale(one.div(speed));
     let cos = u.dot(n);
     // Orient n so that cos ≥ 0.
-    let sign = F4::select(cos.lt(F4::splat(0.0)), F4::splat(-1.0), one);
+    let sign = L::select(zero.gt(cos), L::splat(-1.0), one);
     let n = n.scale(sign);
     let cos = cos * sign;
     let pressure =
-        F4::splat(0.5 * air_density) * speed * speed * (F4::splat(0.5) * doubled_area) * cos;
-    let mut force = u.scale(-(pressure * F4::splat(drag)));
+        L::splat(0.5 * air_density) * speed * speed * (L::splat(0.5) * doubled_area) * cos;
+    let mut force = u.scale(-(pressure * L::splat(drag)));
     if lift > 0.0 {
         let across = n - u.scale(cos);
         let len = across.dot(across).sqrt();
-        let sin = F4::max(one - cos * cos, F4::splat(0.0)).sqrt();
-        let amount = (pressure * F4::splat(lift) * sin)
+        let sin2 = one - cos * cos;
+        let sin = L::select(sin2.gt(zero), sin2, zero).sqrt();
+        let amount = (pressure * L::splat(lift) * sin)
             .div(len)
-            .and(len.gt(F4::splat(1e-6)));
+            .and(len.gt(L::splat(1e-6)));
         force = force - across.scale(amount);
     }
     force.and(valid)
@@ -186,6 +188,7 @@ pub(crate) fn triangle_force4(
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::simd::Baseline8;
 
     #[test]
     fn gusts_are_seeded_and_bounded() {
@@ -204,7 +207,7 @@ mod tests {
     }
 
     #[test]
-    fn four_lanes_agree_with_one() {
+    fn eight_lanes_agree_with_one() {
         let corners = [
             [Vec3A::ZERO, Vec3A::X, Vec3A::Y],
             [
@@ -225,21 +228,31 @@ mod tests {
             Vec3A::new(0.0, 0.0, 1.0),
             Vec3A::new(0.0, 1e-7, 0.0),
         ];
-        let lanes = |k: usize| V4::from_lanes(std::array::from_fn(|t| corners[t][k]));
-        let f = triangle_force4(
-            [lanes(0), lanes(1), lanes(2)],
-            V4::from_lanes(velocity),
+        // Eight lanes: the four triangles twice.
+        let lane = |v: [Vec3A; 4]| -> V3<Baseline8> {
+            let at = |c: fn(Vec3A) -> f32| Baseline8::load(&std::array::from_fn(|l| c(v[l % 4])));
+            V3 {
+                x: at(|v| v.x),
+                y: at(|v| v.y),
+                z: at(|v| v.z),
+            }
+        };
+        let corner = |k: usize| lane(std::array::from_fn(|t| corners[t][k]));
+        let f = triangle_force_lanes(
+            [corner(0), corner(1), corner(2)],
+            lane(velocity),
             1.2,
             1.0,
             0.4,
-        )
-        .lanes();
-        for t in 0..4 {
+        );
+        let (fx, fy, fz) = (f.x.to_array(), f.y.to_array(), f.z.to_array());
+        for l in 0..8 {
+            let t = l % 4;
+            let f = Vec3A::new(fx[l], fy[l], fz[l]);
             let one = triangle_force(corners[t], velocity[t], 1.2, 1.0, 0.4);
             assert!(
-                (f[t] - one).length() <= 1e-6 * (1.0 + one.length()),
-                "{t}: {} vs {one}",
-                f[t]
+                (f - one).length() <= 1e-6 * (1.0 + one.length()),
+                "{t}: {f} vs {one}"
             );
         }
     }
