@@ -6,7 +6,8 @@
 //!
 //! - **Quads.** Garment meshes are usually quad meshes exported as triangles. Two triangles
 //!   that share an edge which is the strictly longest edge of both are read as one quad; that
-//!   edge is a quad diagonal.
+//!   edge is a quad diagonal (unless the other diagonal is much shorter, see
+//!   [`MIN_QUAD_DIAGONAL_RATIO`]).
 //! - **Stretch** constraints: every mesh edge that is not a quad diagonal.
 //! - **Shear** constraints: both diagonals of every quad (the shared edge and the segment
 //!   between the two opposite vertices). Unpaired triangles get no shear constraint; their
@@ -30,6 +31,10 @@ use std::collections::BinaryHeap;
 use glam::Vec3;
 
 use crate::error::ClothError;
+
+/// Two triangles make a quad only if its diagonals differ by at most this ratio (a square's
+/// are equal, a 60° rhombus's 0.58; sewn armholes squash a few quads far below that).
+pub const MIN_QUAD_DIAGONAL_RATIO: f32 = 0.3;
 
 /// The largest vertex count the solver addresses (indices are `u32`).
 pub const MAX_VERTICES: usize = u32::MAX as usize - 1;
@@ -352,9 +357,12 @@ impl MeshTopology {
         let mut diagonal = vec![false; edges.len()];
         let mut quad_count = 0usize;
         for (e, edge) in edges.iter().enumerate() {
-            if let [(t0, _), (t1, _)] = edge.tris[..] {
+            if let [(t0, o0), (t1, o1)] = edge.tris[..] {
                 let key = Some((edge.a, edge.b));
-                if longest[t0 as usize] == key && longest[t1 as usize] == key {
+                // Not a sliver rhombus: its short diagonal would be a needle-short, stiff shear
+                // constraint across a squashed patch.
+                let shaped = length(o0, o1) >= MIN_QUAD_DIAGONAL_RATIO * length(edge.a, edge.b);
+                if longest[t0 as usize] == key && longest[t1 as usize] == key && shaped {
                     quad_of[t0 as usize] = t1;
                     quad_of[t1 as usize] = t0;
                     diagonal[e] = true;
@@ -517,6 +525,29 @@ mod tests {
         let cell = 0.25 * (1.0 / 3.0);
         let interior = topo.stretch.iter().find(|s| s.vertices == [6, 7]).unwrap();
         assert!((interior.area - cell).abs() < 1e-6);
+    }
+
+    #[test]
+    fn a_squashed_rhombus_is_two_triangles_not_a_quad() {
+        // Two triangles on a 2 cm edge; their apexes `height` either side of its middle.
+        let rhombus = |height: f32| {
+            let p = vec![
+                Vec3::ZERO,
+                Vec3::new(0.02, 0.0, 0.0),
+                Vec3::new(0.01, height, 0.0),
+                Vec3::new(0.01, -height, 0.0),
+            ];
+            MeshTopology::new(&ClothMesh::new(p, vec![[0, 1, 2], [1, 0, 3]]).unwrap())
+        };
+        // Diagonals 2 cm and 1.4 cm (ratio 0.7): a quad, with both shear diagonals.
+        let square = rhombus(0.007);
+        assert_eq!((square.quad_count, square.shear.len()), (1, 2));
+        assert_eq!(square.stretch.len(), 4);
+        // 2 cm and 1.4 mm (a sewn armhole's sliver): no quad, five stretch edges.
+        let sliver = rhombus(0.0007);
+        assert_eq!((sliver.quad_count, sliver.shear.len()), (0, 0));
+        assert_eq!(sliver.stretch.len(), 5);
+        assert_eq!(sliver.bending.len(), 1);
     }
 
     #[test]

@@ -414,10 +414,10 @@ pub struct ClothSolver {
     external_dirty: bool,
     triangle_force: Vec<Vec3A>,
     distance_lambda: Vec<[f32; LANES]>,
-    bend_lambda: Vec<[[f32; LANES]; 3]>,
+    bend_lambda: Vec<[[f32; LANES]; 5]>,
     /// Inverse XPBD denominators per batch, for substeps with `1/h² = inverse_for_inv_h2`.
     distance_inverse: Vec<[f32; LANES]>,
-    bend_inverse: Vec<[f32; LANES]>,
+    bend_inverse: Vec<[[f32; LANES]; 3]>,
     /// Per bending batch: the curved stencils' targets, taken at the step's first constraint
     /// pass and held over its substeps.
     bend_targets: Vec<BendTarget>,
@@ -432,6 +432,8 @@ pub struct ClothSolver {
     solo_spheres: Vec<u32>,
     planes: Vec<Plane>,
     swept: Vec<SweptCollider>,
+    /// The colliders' shapes at the substep boundaries (a buffer of `prepare_colliders`).
+    shapes: Vec<Shape>,
     frame: FrameState,
     wind: Option<Wind>,
     time: f64,
@@ -602,7 +604,7 @@ impl ClothSolver {
             external_dirty: false,
             triangle_force: vec![Vec3A::ZERO; mesh.triangles().len()],
             distance_lambda: vec![[0.0; LANES]; if keep_lambda { distance_batches } else { 0 }],
-            bend_lambda: vec![[[0.0; LANES]; 3]; if keep_lambda { bend_batches } else { 0 }],
+            bend_lambda: vec![[[0.0; LANES]; 5]; if keep_lambda { bend_batches } else { 0 }],
             distance_inverse: Vec::new(),
             bend_inverse: Vec::new(),
             bend_targets: vec![BendTarget::default(); bend_batches],
@@ -616,6 +618,7 @@ impl ClothSolver {
             solo_spheres: Vec::new(),
             planes: Vec::new(),
             swept: Vec::new(),
+            shapes: Vec::new(),
             frame: FrameState::default(),
             wind: None,
             time: 0.0,
@@ -659,7 +662,7 @@ impl ClothSolver {
             self.distance_lambda
                 .resize(self.model.constraints.distance.len(), [0.0; LANES]);
             self.bend_lambda
-                .resize(self.model.constraints.bend.len(), [[0.0; LANES]; 3]);
+                .resize(self.model.constraints.bend.len(), [[0.0; LANES]; 5]);
         }
         for (limit, rest) in self
             .model
@@ -898,7 +901,7 @@ impl ClothSolver {
         self.vs.fill(Vec3A::ZERO);
         self.external.fill(Vec3A::ZERO);
         self.distance_lambda.fill([0.0; LANES]);
-        self.bend_lambda.fill([[0.0; LANES]; 3]);
+        self.bend_lambda.fill([[0.0; LANES]; 5]);
         for (slot, &vertex) in self.model.attached.iter().enumerate() {
             self.target_start[slot] = self.x[vertex as usize];
             self.target_end[slot] = self.x[vertex as usize];
@@ -1199,13 +1202,18 @@ impl ClothSolver {
                 Shape::sphere(c, r)
             }
         };
-        for sub in 0..substeps {
-            let t0 = sub as f32 / substeps as f32;
-            let t1 = (sub + 1) as f32 / substeps as f32;
+        // Each shape at every substep boundary, once.
+        let shapes = &mut self.shapes;
+        shapes.clear();
+        for boundary in 0..=substeps {
+            let t = boundary as f32 / substeps as f32;
+            shapes.extend((0..count).map(|collider| shape_at(collider, t)));
+        }
+        for sub in 0..substeps as usize {
             for collider in 0..count {
                 self.swept.push(SweptCollider::new(
-                    shape_at(collider, t0),
-                    shape_at(collider, t1),
+                    shapes[sub * count + collider],
+                    shapes[(sub + 1) * count + collider],
                     thickness,
                 ));
             }
@@ -1234,9 +1242,9 @@ struct StepContext<'a> {
     external: SharedSlice<'a, Vec3A>,
     triangle_force: SharedSlice<'a, Vec3A>,
     distance_lambda: SharedSlice<'a, [f32; LANES]>,
-    bend_lambda: SharedSlice<'a, [[f32; LANES]; 3]>,
+    bend_lambda: SharedSlice<'a, [[f32; LANES]; 5]>,
     distance_inverse: &'a [[f32; LANES]],
-    bend_inverse: &'a [[f32; LANES]],
+    bend_inverse: &'a [[[f32; LANES]; 3]],
     bend_targets: SharedSlice<'a, BendTarget>,
     block_health: SharedSlice<'a, ItemHealth>,
     stretch_health: SharedSlice<'a, (f32, u32)>,
@@ -1288,18 +1296,19 @@ impl StepContext<'_> {
                         self.k.inv_h2,
                         first,
                     ),
-                    RunKind::FlatBend | RunKind::CurvedBend => solve_bend(
+                    RunKind::Bend { curved, pairs } => solve_bend(
                         self.k.isa,
-                        match (run.kind, new_frame) {
-                            (RunKind::FlatBend, _) => BendFrame::Flat,
-                            (_, true) => BendFrame::New(&self.bend_targets, a),
-                            (_, false) => BendFrame::Held(&self.bend_targets, a),
+                        match (curved, new_frame) {
+                            (false, _) => BendFrame::Flat,
+                            (true, true) => BendFrame::New(&self.bend_targets, a),
+                            (true, false) => BendFrame::Held(&self.bend_targets, a),
                         },
+                        pairs,
                         &c.bend[a..b],
                         &self.bend_inverse[a..b],
                         keep.then_some((&self.bend_lambda, a)),
                         x,
-                        self.k.bend_alpha,
+                        (self.k.bend_alpha, self.k.inv_h2),
                         first,
                     ),
                 }
@@ -1310,11 +1319,11 @@ impl StepContext<'_> {
     /// The stretch check of item `item`'s distance constraints.
     fn stretch(&self, item: usize) {
         let c = &self.model.constraints;
-        let (d0, d1) = c.items[item].distance;
+        let (d0, d1) = c.items[item].check;
         // SAFETY: positions are only read in this phase; slot `item` belongs to this item.
         unsafe {
             let worst = max_stretch_squared(
-                &c.distance[d0 as usize..d1 as usize],
+                &c.check[d0 as usize..d1 as usize],
                 d0 as usize,
                 self.xs.as_ptr(),
             );
