@@ -14,7 +14,9 @@
 //! Waiting spins briefly and then yields. Between steps the workers spin for a few tens of
 //! microseconds (steps often follow each other closely) and then sleep on a condition
 //! variable; the solver wakes them at the start of a step (`WorkerPool::prewake`), so that
-//! their wake-up overlaps its serial preparations.
+//! their wake-up overlaps its serial preparations. Waking a thread is a system call, made only
+//! when one is blocked (the pool counts them), so steps that follow each other closely make
+//! none.
 //!
 //! The workers are persistent (spawning threads per step would cost tens of microseconds and
 //! allocate); the job they run borrows the solver's data for the duration of
@@ -45,6 +47,10 @@ struct State {
     running: usize,
     shutdown: bool,
     panicked: bool,
+    /// Workers blocked on `Shared::wake` (a wake-up is a system call: skipped when none).
+    sleepers: usize,
+    /// Whether the caller is blocked on `Shared::finished`.
+    caller_waiting: bool,
 }
 
 struct Shared {
@@ -81,6 +87,8 @@ impl WorkerPool {
                 running: 0,
                 shutdown: false,
                 panicked: false,
+                sleepers: 0,
+                caller_waiting: false,
             }),
             wake: Condvar::new(),
             finished: Condvar::new(),
@@ -110,8 +118,11 @@ impl WorkerPool {
         if self.workers.is_empty() {
             return;
         }
-        self.shared.lock().alarm += 1;
-        self.shared.wake.notify_all();
+        let mut state = self.shared.lock();
+        state.alarm += 1;
+        if state.sleepers > 0 {
+            self.shared.wake.notify_all();
+        }
     }
 
     /// Runs `job(thread)` on every thread of the pool (the caller is thread 0, the workers
@@ -138,8 +149,12 @@ impl WorkerPool {
             self.shared
                 .generation_hint
                 .store(state.generation, Ordering::Release);
+            // A worker that is not blocked yet sees the new generation before it would block
+            // (both happen under the lock).
+            if state.sleepers > 0 {
+                self.shared.wake.notify_all();
+            }
         }
-        self.shared.wake.notify_all();
         let wait = WaitForWorkers(&self.shared);
         job(0);
         drop(wait);
@@ -157,12 +172,14 @@ impl Drop for WaitForWorkers<'_> {
         spin_until(|| self.0.running_hint.load(Ordering::Acquire) == 0);
         let mut state = self.0.lock();
         while state.running > 0 {
+            state.caller_waiting = true;
             state = self
                 .0
                 .finished
                 .wait(state)
                 .unwrap_or_else(|e| e.into_inner());
         }
+        state.caller_waiting = false;
         state.job = None;
     }
 }
@@ -203,7 +220,9 @@ fn worker_loop(shared: &Shared, thread: usize) {
         let job = {
             let mut state = shared.lock();
             while state.generation == seen && state.alarm == alarm && !state.shutdown {
+                state.sleepers += 1;
                 state = shared.wake.wait(state).unwrap_or_else(|e| e.into_inner());
+                state.sleepers -= 1;
             }
             if state.shutdown {
                 return;
@@ -228,7 +247,7 @@ fn worker_loop(shared: &Shared, thread: usize) {
         }
         state.running -= 1;
         shared.running_hint.store(state.running, Ordering::Release);
-        if state.running == 0 {
+        if state.running == 0 && state.caller_waiting {
             shared.finished.notify_all();
         }
     }
