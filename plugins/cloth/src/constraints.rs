@@ -70,6 +70,10 @@ use crate::simd::{Baseline8, Isa, LANES, Lanes, V3, offset};
 const PACK_WINDOW: usize = 32;
 /// An empty lane.
 const NONE: u32 = u32::MAX;
+/// Items' padding particles lie this many `Vec3A` (64 bytes) apart: the items of a phase run
+/// on different threads, and every batch with an empty lane writes its item's padding
+/// particle; on one cache line those writes would make the line bounce between cores.
+const PADDING_STRIDE: usize = 4;
 
 /// Eight distance constraints, one per lane.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -407,7 +411,7 @@ impl ConstraintSet {
             .collect();
         let mut used = vec![0u128; n];
         let mut packer = Packer {
-            mask: vec![0; n + item_members.len()],
+            mask: vec![0; n + PADDING_STRIDE * item_members.len()],
         };
         let mut set = Self {
             bend_compliance: compliance.unwrap_or(0.0),
@@ -425,7 +429,7 @@ impl ConstraintSet {
             }
         };
         for (item, members) in item_members.iter().enumerate() {
-            let padding = (n + item) as u32;
+            let padding = (n + PADDING_STRIDE * item) as u32;
             // Greedy colouring over the item's free particles, distance constraints first
             // (a colour's constraints share no free particle, so the order inside a colour
             // does not change the result); colours past 127 share one last colour.
@@ -578,9 +582,10 @@ impl ConstraintSet {
         }));
     }
 
-    /// Number of padding particles (one per item).
+    /// Number of slots after the particles for the padding particles (one per item, each on
+    /// its own cache line).
     pub fn padding_particles(&self) -> usize {
-        self.items.len()
+        PADDING_STRIDE * self.items.len()
     }
 
     /// The vertices (solver numbering) of lane `lane_id % 8` of check batch `lane_id / 8`.

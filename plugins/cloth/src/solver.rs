@@ -34,8 +34,10 @@
 //!    the velocity;
 //! 8. **velocity** `v = (x − x_prev)/h`.
 //!
-//! Steps 5–8, the next substep's step 3 and the next substep's constraints inside each block
-//! touch only that block's particles and run as one parallel pass per block. After the last
+//! Steps 5–8 and the next substep's step 3 touch one particle each and run as one parallel
+//! pass over groups of collision chunks (a quarter of a block each, so that the threads can
+//! share out the uneven collision work); then the blocks' constraints run as one parallel
+//! pass, one item per block (their work is nearly equal). After the last
 //! substep a **blow-up guard** looks for non-finite positions or velocities, speeds above
 //! [`BlowUpGuard::max_speed_m_s`] and constraints stretched beyond
 //! [`BlowUpGuard::max_stretch_ratio`], and reports it in the [`StepReport`]; the caller should
@@ -79,6 +81,11 @@ use crate::simd::Avx8;
 use crate::simd::{Baseline8, Isa, LANES, Lanes, V3, offset};
 use crate::wind::{Wind, triangle_force, triangle_force_lanes};
 
+/// Work items per block for the particles' part of a substep (prediction, tethers,
+/// collisions): collisions make some blocks' particles several times as costly as others'
+/// (those by the legs), and smaller items let the threads share that out. Blocks' constraint
+/// work is the same for every block.
+const PARTICLE_GROUPS: usize = 4;
 /// Triangles per aerodynamics work item.
 const TRIANGLE_ITEM: usize = 1024;
 /// Alternations between the tethers of one particle.
@@ -334,9 +341,13 @@ struct ItemHealth {
 #[derive(Debug, Clone, Copy)]
 enum Phase {
     AeroTriangles,
-    /// Per block: finish substep `sub - 1` (if `sub > 0`), predict substep `sub`, solve the
-    /// block's constraints (first iteration). At `sub == 0` the block also reads the
-    /// positions from the mesh-ordered copy and gathers its aerodynamic forces.
+    /// Per group of collision chunks (a part of a block, see `PARTICLE_GROUPS`): finish
+    /// substep `sub - 1` (if `sub > 0`) and predict substep `sub`. At `sub == 0` the group also
+    /// reads the positions from the mesh-ordered copy and gathers its aerodynamic forces.
+    Particles {
+        sub: u32,
+    },
+    /// Per block: solve the block's constraints (first iteration of substep `sub`).
     Block {
         sub: u32,
     },
@@ -1025,6 +1036,7 @@ impl ClothSolver {
 
         // The phase program of this step.
         let blocks = self.model.order.blocks() as u32;
+        let groups = blocks * PARTICLE_GROUPS as u32;
         let levels = &self.model.constraints.separator_levels;
         self.phases.clear();
         self.phase_items.clear();
@@ -1040,6 +1052,7 @@ impl ClothSolver {
         for sub in 0..substeps {
             for iteration in 0..settings.iterations {
                 if iteration == 0 {
+                    push(Phase::Particles { sub }, groups);
                     push(Phase::Block { sub }, blocks);
                 } else {
                     push(Phase::BlockIteration, blocks);
@@ -1255,10 +1268,8 @@ impl StepContext<'_> {
         let item = item as usize;
         match self.phases[phase] {
             Phase::AeroTriangles => self.aero_triangles(item),
-            Phase::Block { sub } => {
-                self.block_particles(sub, item);
-                self.solve(item, true, sub == 0);
-            }
+            Phase::Particles { sub } => self.group_particles(sub, item),
+            Phase::Block { sub } => self.solve(item, true, sub == 0),
             Phase::BlockIteration => self.solve(item, false, false),
             Phase::Separators {
                 level,
@@ -1338,9 +1349,21 @@ impl StepContext<'_> {
     }
 
     /// Finishes substep `sub - 1` (if `sub > 0`) and predicts substep `sub` for every chunk of
-    /// `block`; the first substep first reads the positions and the aerodynamic forces.
-    fn block_particles(&self, sub: u32, block: usize) {
-        for range in self.chunks(block) {
+    /// particle group `group`; the first substep first reads the positions and the aerodynamic
+    /// forces.
+    fn group_particles(&self, sub: u32, group: usize) {
+        let o = &self.model.order;
+        let block = group / PARTICLE_GROUPS;
+        let part = group % PARTICLE_GROUPS;
+        let (first, end) = (
+            o.block_chunks[block] as usize,
+            o.block_chunks[block + 1] as usize,
+        );
+        let count = end - first;
+        let chunks =
+            first + part * count / PARTICLE_GROUPS..first + (part + 1) * count / PARTICLE_GROUPS;
+        for c in chunks {
+            let range = o.chunk_start[c] as usize..o.chunk_start[c + 1] as usize;
             if sub == 0 {
                 self.load(range.clone());
             }
