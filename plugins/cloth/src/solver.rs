@@ -56,10 +56,11 @@
 //!
 //! A thread that the operating system deschedules while it holds an item stalls the others
 //! at the next synchronisation for the rest of its time slice (milliseconds). When a step's
-//! threads spent more than half of it waiting for each other, the next `SOLO_STEPS` steps
-//! (half a second) run on the caller's thread alone, which gives the same result; then the
-//! workers are tried again. On a machine shared with other busy processes this costs at most
-//! one slow step in 60.
+//! threads spent more than half of it waiting for each other, and that happened before within
+//! the last `SOLO_STEPS` steps, the next `SOLO_STEPS` steps (half a second) run on the
+//! caller's thread alone, which gives the same result; then the workers are tried again. On a
+//! machine shared with other busy processes this costs at most two slow steps in 120; a lone
+//! stall (a virtual machine's processor taken away for a moment) costs only itself.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
@@ -451,6 +452,8 @@ pub struct ClothSolver {
     pool: WorkerPool,
     /// Steps left to run on the caller's thread alone (see `SOLO_STEPS`).
     solo_steps: u32,
+    /// Parallel steps since the last stalled one (see `SOLO_STEPS`).
+    since_stall: u32,
     isa: Isa,
     counters: PhaseCounters,
     phases: Vec<Phase>,
@@ -635,6 +638,7 @@ impl ClothSolver {
             time: 0.0,
             pool: WorkerPool::new(settings.threads),
             solo_steps: 0,
+            since_stall: u32::MAX,
             isa: Isa::detect(),
             counters: PhaseCounters::new(),
             phases: Vec::new(),
@@ -1114,10 +1118,15 @@ impl ClothSolver {
                     waited.fetch_max(w, Ordering::Relaxed);
                 });
                 let (waited, elapsed) = (waited.into_inner(), start.elapsed().as_nanos() as u64);
+                self.since_stall = self.since_stall.saturating_add(1);
                 if waited > STALL_MIN_NS && 2 * waited > elapsed {
-                    // A thread was descheduled while holding an item (the machine is busy):
-                    // run the next steps on the caller's thread alone. The results are the same.
-                    self.solo_steps = SOLO_STEPS;
+                    // A thread was descheduled while holding an item. Again (the machine is
+                    // busy): run the next steps on the caller's thread alone. The results are
+                    // the same.
+                    if self.since_stall <= SOLO_STEPS {
+                        self.solo_steps = SOLO_STEPS;
+                    }
+                    self.since_stall = 0;
                 }
             } else {
                 job(0, 1);
