@@ -1579,7 +1579,7 @@ impl StepContext<'_> {
         if let Some(sub) = finish {
             self.tethers_and_collisions(sub, range.clone());
         }
-        let fast = finish.is_some() && predict.is_some() && k.frame.is_none();
+        let fast = finish.is_some() && predict.is_some();
         let mut i = range.start;
         while i < range.end {
             if fast
@@ -1629,12 +1629,7 @@ impl StepContext<'_> {
                         self.vs.get(i)
                     };
                     if predict.is_some() {
-                        let mut a = k.gravity + self.external.get(i);
-                        if let Some(f) = &k.frame {
-                            a -= f.linear + f.euler.cross(p) + f.coriolis.cross(vel);
-                            a -= f.centrifugal * f.omega.cross(f.omega.cross(p));
-                        }
-                        vel = (vel + a * k.h) * k.damping;
+                        vel = predict_velocity(k, p, vel, self.external.get(i));
                         self.xs_prev.set(i, p);
                         self.xs.set(i, p + vel * k.h);
                     }
@@ -2196,8 +2191,20 @@ unsafe fn aero_with<L: Lanes>(context: &StepContext<'_>, t: usize) {
     }
 }
 
+/// The velocity of a free particle at `p` moving at `vel` after a substep's external, frame
+/// and damping terms ([`integrate_free`] does the same for eight particles).
+#[inline]
+fn predict_velocity(k: &StepConstants, p: Vec3A, vel: Vec3A, external: Vec3A) -> Vec3A {
+    let mut a = k.gravity + external;
+    if let Some(f) = &k.frame {
+        a -= f.linear + f.euler.cross(p) + f.coriolis.cross(vel);
+        a -= f.centrifugal * f.omega.cross(f.omega.cross(p));
+    }
+    (vel + a * k.h) * k.damping
+}
+
 /// The velocity of substep `s` and the prediction of substep `s + 1` for eight consecutive
-/// free particles in the simulation's inertial frame (no body frame): the vectorised form of
+/// free particles, with the moving body frame's terms: the vectorised form of
 /// [`StepContext::particles`]. `x` holds the positions, positions at the substep start and
 /// velocities of the first particle; `external` its external acceleration.
 ///
@@ -2228,12 +2235,8 @@ unsafe fn integrate_free_with<L: Lanes>(
     k: &StepConstants,
 ) {
     let lanes: [u32; LANES] = std::array::from_fn(|l| offset(l as u32));
-    let splat = |v: Vec3A| V3 {
-        x: L::splat(v.x),
-        y: L::splat(v.y),
-        z: L::splat(v.z),
-    };
-    // SAFETY: the caller's contract.
+    // SAFETY: the caller's contract. (No closures here: they would not inherit the caller's
+    // target features.)
     unsafe {
         let p = L::gather(xs, &lanes);
         let mut vel = (p - L::gather(xs_prev, &lanes)).scale(L::splat(k.inv_h));
@@ -2243,7 +2246,17 @@ unsafe fn integrate_free_with<L: Lanes>(
         if fast.bits() != 0 {
             vel = V3::select(fast, vel.scale(max.div(speed2.sqrt())), vel);
         }
-        let a = splat(k.gravity) + L::gather(external, &lanes);
+        let mut a = V3::splat(k.gravity) + L::gather(external, &lanes);
+        if let Some(f) = &k.frame {
+            // The fictitious accelerations of the moving body frame, as in the one-particle
+            // path of `StepContext::particles`.
+            let omega = V3::splat(f.omega);
+            a = a
+                - (V3::splat(f.linear)
+                    + V3::splat(f.euler).cross(p)
+                    + V3::splat(f.coriolis).cross(vel));
+            a = a - omega.cross(omega.cross(p)).scale(L::splat(f.centrifugal));
+        }
         let vel = (vel + a.scale(L::splat(k.h))).scale(L::splat(k.damping));
         L::scatter(xs_prev, &lanes, p);
         L::scatter(xs, &lanes, p + vel.scale(L::splat(k.h)));
@@ -2415,6 +2428,91 @@ mod tests {
                 .collect::<Vec<_>>()
         };
         assert_eq!(run(Isa::Baseline), run(Isa::Avx));
+    }
+
+    #[test]
+    fn eight_particles_integrate_as_one_does_in_a_moving_frame() {
+        let motion = FrameMotion {
+            velocity: Vec3::new(0.3, 0.0, -0.2),
+            acceleration: Vec3::new(1.5, -0.4, 2.0),
+            angular_velocity: Vec3::new(0.2, 3.0, -0.5),
+            angular_acceleration: Vec3::new(-4.0, 12.0, 1.0),
+            to_local: glam::Quat::from_rotation_y(0.4),
+            pose: RigidPose::IDENTITY,
+        };
+        let inertia = FrameInertia::FULL;
+        let h = 1.0 / 1200.0;
+        let k = StepConstants {
+            substeps: 10,
+            h,
+            inv_h: 1.0 / h,
+            inv_h2: 1.0 / (h * h),
+            bend_alpha: 0.0,
+            damping: 0.999,
+            gravity: Vec3A::new(0.0, -9.81, 0.0),
+            keep_lambda: false,
+            aero: false,
+            isa: Isa::detect(),
+            thickness: 0.003,
+            friction: 0.3,
+            max_velocity: 5.0,
+            frame: Some(FrameTerms {
+                linear: Vec3A::from(motion.acceleration * inertia.linear),
+                euler: Vec3A::from(motion.angular_acceleration * inertia.angular),
+                coriolis: Vec3A::from(2.0 * motion.angular_velocity * inertia.angular),
+                omega: Vec3A::from(motion.angular_velocity),
+                centrifugal: inertia.centrifugal,
+                air_velocity: Vec3A::ZERO,
+                air_omega: Vec3A::ZERO,
+                motion,
+            }),
+            colliders: 0,
+            air_density: 0.0,
+            drag: 0.0,
+            lift: 0.0,
+            time: 0.0,
+        };
+        let mut seed = 7u32;
+        let mut point = |scale: f32| {
+            Vec3A::new(random(&mut seed), random(&mut seed), random(&mut seed)) * scale
+        };
+        let p: Vec<Vec3A> = (0..LANES).map(|_| point(0.5)).collect();
+        // One particle moves faster than the cap.
+        let moved: Vec<f32> = (0..LANES)
+            .map(|l| if l == 3 { 0.02 } else { 0.002 })
+            .collect();
+        let prev: Vec<Vec3A> = p
+            .iter()
+            .zip(&moved)
+            .map(|(&p, &m)| p - point(1.0).normalize_or_zero() * m)
+            .collect();
+        let external: Vec<Vec3A> = (0..LANES).map(|_| point(2.0)).collect();
+        for isa in [Isa::Baseline, Isa::detect()] {
+            let (mut xs, mut xs_prev, mut vs) = (p.clone(), prev.clone(), vec![Vec3A::ZERO; LANES]);
+            // SAFETY: eight particles in each buffer.
+            unsafe {
+                integrate_free(
+                    isa,
+                    [xs.as_mut_ptr(), xs_prev.as_mut_ptr(), vs.as_mut_ptr()],
+                    external.as_ptr(),
+                    &StepConstants { isa, ..k },
+                )
+            };
+            for l in 0..LANES {
+                let mut vel = (p[l] - prev[l]) * k.inv_h;
+                if vel.length() > k.max_velocity {
+                    vel = vel * (k.max_velocity / vel.length());
+                }
+                let vel = predict_velocity(&k, p[l], vel, external[l]);
+                assert!(
+                    (vs[l] - vel).length() <= 1e-5 * vel.length().max(1.0),
+                    "{l}: {} vs {vel}",
+                    vs[l]
+                );
+                assert!((xs[l] - (p[l] + vel * h)).length() <= 1e-6);
+                assert_eq!(xs_prev[l], p[l]);
+            }
+        }
     }
 
     #[test]
