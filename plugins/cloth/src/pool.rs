@@ -310,15 +310,17 @@ impl PhaseCounters {
     /// (the same blocks of particles, still in its cache) substep after substep, while the
     /// items left over go to whichever thread is free.
     ///
-    /// Returns how long this thread waited for other threads to finish phases.
+    /// Returns how long this thread waited for other threads to finish phases, and the
+    /// longest it spent in one item (an item normally takes microseconds; one that took
+    /// milliseconds was descheduled by the operating system while the thread held it).
     pub fn run_phases(
         &self,
         thread: usize,
         threads: usize,
         items: &[u32],
         exec: &(dyn Fn(usize, u32) + Sync),
-    ) -> std::time::Duration {
-        let mut waited = std::time::Duration::ZERO;
+    ) -> PhaseTimes {
+        let mut times = PhaseTimes::default();
         for (p, &count) in items.iter().enumerate() {
             if p > 0 && self.done[p - 1].0.load(Ordering::Acquire) < items[p - 1] {
                 let before = items[p - 1];
@@ -326,7 +328,8 @@ impl PhaseCounters {
                 let mut spins = 0u32;
                 while self.done[p - 1].0.load(Ordering::Acquire) < before {
                     if self.abort.load(Ordering::Relaxed) {
-                        return waited + start.elapsed();
+                        times.waited += start.elapsed();
+                        return times;
                     }
                     if spins < 4_000 {
                         std::hint::spin_loop();
@@ -335,7 +338,7 @@ impl PhaseCounters {
                         std::thread::yield_now();
                     }
                 }
-                waited += start.elapsed();
+                times.waited += start.elapsed();
             }
             // Items this thread completed; published once, when no item is left to claim.
             let mut completed = 0u32;
@@ -348,7 +351,9 @@ impl PhaseCounters {
                     continue;
                 }
                 let guard = AbortOnUnwind(&self.abort);
+                let start = std::time::Instant::now();
                 exec(p, k as u32);
+                times.longest_item = times.longest_item.max(start.elapsed());
                 std::mem::forget(guard);
                 completed += 1;
             }
@@ -356,8 +361,17 @@ impl PhaseCounters {
                 self.done[p].0.fetch_add(completed, Ordering::Release);
             }
         }
-        waited
+        times
     }
+}
+
+/// What [`PhaseCounters::run_phases`] measured on one thread.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct PhaseTimes {
+    /// Time spent waiting for other threads to finish a phase.
+    pub waited: std::time::Duration,
+    /// The longest time spent in one item.
+    pub longest_item: std::time::Duration,
 }
 
 /// Raises the abort flag if an item panics, so that other threads stop waiting for it.

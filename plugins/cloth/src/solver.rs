@@ -55,15 +55,14 @@
 //! only when the collider count or the substep count grows).
 //!
 //! A thread that the operating system deschedules while it holds an item stalls the others
-//! at the next synchronisation for the rest of its time slice (milliseconds). When a step's
-//! threads spent more than half of it waiting for each other, and that happened before within
-//! the last `SOLO_STEPS` steps, the next `SOLO_STEPS` steps (half a second) run on the
-//! caller's thread alone, which gives the same result; then the workers are tried again. On a
+//! at the next synchronisation for the rest of its time slice (milliseconds). Each item is
+//! timed (two clock reads); when one took over a millisecond while another thread waited, and
+//! that happened before within the last `SOLO_STEPS` steps, the next `SOLO_STEPS` steps (half a
+//! second) run on the caller's thread alone, which gives the same result; then the workers are tried again. On a
 //! machine shared with other busy processes this costs at most two slow steps in 120; a lone
 //! stall (a virtual machine's processor taken away for a moment) costs only itself.
 
 use std::sync::atomic::{AtomicU64, Ordering};
-use std::time::Instant;
 
 use glam::{Vec3, Vec3A};
 
@@ -98,8 +97,9 @@ const OVERLAP_ROUNDS: usize = 6;
 /// Longest joint push-out out of two shapes, in multiples of the deeper one's depth (the
 /// crease of two surfaces meeting at 60° or more).
 const CREASE_REACH: f32 = 2.0;
-/// A parallel step whose threads waited for each other more than half the time, and more than
-/// this, was slowed down by the operating system descheduling a thread that held work.
+/// A parallel step in which a thread spent longer than this in one work item (they take
+/// microseconds), while another waited at least half as long, was slowed down by the
+/// operating system descheduling the thread that held the item.
 const STALL_MIN_NS: u64 = 1_000_000;
 /// Steps then run on the caller's thread alone before threads are tried again (half a second
 /// at 120 Hz).
@@ -1112,14 +1112,15 @@ impl ClothSolver {
             let job = |thread, threads| counters.run_phases(thread, threads, items, &exec);
             if threads > 1 && self.solo_steps == 0 {
                 let waited = AtomicU64::new(0);
-                let start = Instant::now();
+                let longest_item = AtomicU64::new(0);
                 self.pool.run(&|thread| {
-                    let w = job(thread, threads).as_nanos() as u64;
-                    waited.fetch_max(w, Ordering::Relaxed);
+                    let times = job(thread, threads);
+                    waited.fetch_max(times.waited.as_nanos() as u64, Ordering::Relaxed);
+                    longest_item.fetch_max(times.longest_item.as_nanos() as u64, Ordering::Relaxed);
                 });
-                let (waited, elapsed) = (waited.into_inner(), start.elapsed().as_nanos() as u64);
+                let (waited, longest_item) = (waited.into_inner(), longest_item.into_inner());
                 self.since_stall = self.since_stall.saturating_add(1);
-                if waited > STALL_MIN_NS && 2 * waited > elapsed {
+                if longest_item > STALL_MIN_NS && 2 * waited > STALL_MIN_NS {
                     // A thread was descheduled while holding an item. Again (the machine is
                     // busy): run the next steps on the caller's thread alone. The results are
                     // the same.
