@@ -1044,19 +1044,10 @@ struct BendArgs<'a, 's> {
 /// constraints solved after the bending.
 #[inline(always)]
 unsafe fn bend_kernel<L: Lanes, const MODE: u8, const PAIRS: u8>(a: BendArgs<'_, '_>) {
-    let BendArgs {
-        batches,
-        inverse_denominator,
-        lambda,
-        x,
-        alpha,
-        inv_h2,
-        first,
-        targets,
-    } = a;
-    let alpha = L::splat(alpha);
-    let inv_h2 = L::splat(inv_h2);
-    for (k, (c, inv)) in batches.iter().zip(inverse_denominator).enumerate() {
+    let (lambda, x, first, targets) = (a.lambda, a.x, a.first, a.targets);
+    let alpha = L::splat(a.alpha);
+    let inv_h2 = L::splat(a.inv_h2);
+    for (k, (c, inv)) in a.batches.iter().zip(a.inverse_denominator).enumerate() {
         // SAFETY: see `solve_bend`.
         unsafe {
             // (No closures here: they would not inherit the caller's target features.)
