@@ -56,11 +56,12 @@
 //!
 //! A thread that the operating system deschedules while it holds an item stalls the others
 //! at the next synchronisation for the rest of its time slice (milliseconds). Each item is
-//! timed (two clock reads); when one took over a millisecond while another thread waited, and
-//! that happened before within the last `SOLO_STEPS` steps, the next `SOLO_STEPS` steps (half a
-//! second) run on the caller's thread alone, which gives the same result; then the workers are tried again. On a
-//! machine shared with other busy processes this costs at most two slow steps in 120; a lone
-//! stall (a virtual machine's processor taken away for a moment) costs only itself.
+//! timed (two clock reads); when one took over a millisecond while the threads waited at least
+//! half as long, and that happened before within the last `SOLO_STEPS` steps, the next
+//! `SOLO_STEPS` steps (half a second) run on the caller's thread alone, which gives the same
+//! result; then the workers are tried again. On a machine shared with other busy processes
+//! this costs at most two slow steps in 120; a lone stall (a virtual machine's processor taken
+//! away for a moment) costs only itself.
 
 use std::sync::atomic::{AtomicU64, Ordering};
 
@@ -98,7 +99,7 @@ const OVERLAP_ROUNDS: usize = 6;
 /// crease of two surfaces meeting at 60° or more).
 const CREASE_REACH: f32 = 2.0;
 /// A parallel step in which a thread spent longer than this in one work item (they take
-/// microseconds), while another waited at least half as long, was slowed down by the
+/// microseconds), while a thread waited at least half as long in all, was slowed down by the
 /// operating system descheduling the thread that held the item.
 const STALL_MIN_NS: u64 = 1_000_000;
 /// Steps then run on the caller's thread alone before threads are tried again (half a second
@@ -452,7 +453,7 @@ pub struct ClothSolver {
     pool: WorkerPool,
     /// Steps left to run on the caller's thread alone (see `SOLO_STEPS`).
     solo_steps: u32,
-    /// Parallel steps since the last stalled one (see `SOLO_STEPS`).
+    /// Steps since the last stalled one (see `SOLO_STEPS`).
     since_stall: u32,
     isa: Isa,
     counters: PhaseCounters,
@@ -1120,7 +1121,7 @@ impl ClothSolver {
                 });
                 let (waited, longest_item) = (waited.into_inner(), longest_item.into_inner());
                 self.since_stall = self.since_stall.saturating_add(1);
-                if longest_item > STALL_MIN_NS && 2 * waited > STALL_MIN_NS {
+                if longest_item > STALL_MIN_NS && 2 * waited >= longest_item {
                     // A thread was descheduled while holding an item. Again (the machine is
                     // busy): run the next steps on the caller's thread alone. The results are
                     // the same.
@@ -1132,6 +1133,7 @@ impl ClothSolver {
             } else {
                 job(0, 1);
                 self.solo_steps = self.solo_steps.saturating_sub(1);
+                self.since_stall = self.since_stall.saturating_add(1);
             }
         }
 
