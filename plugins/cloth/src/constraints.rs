@@ -494,15 +494,18 @@ impl ConstraintSet {
                     for lanes in packer.pack(&ids, |k| bend[(k - bend_base) as usize].v) {
                         let lanes = lanes.map(|k| if k == NONE { NONE } else { k - bend_base });
                         let batch = bend_batch(&bend, &distance, lanes, padding);
-                        let kind = lanes
-                            .iter()
-                            .filter(|&&k| k != NONE)
-                            .map(|&k| bend_kind(&bend[k as usize]))
-                            .max()
-                            .unwrap_or(RunKind::Bend {
-                                curved: false,
-                                pairs: 0,
-                            });
+                        // Curved if any lane is, with as many pairs as the lane with most.
+                        let (mut curved, mut pairs) = (false, 0);
+                        for &k in lanes.iter().filter(|&&k| k != NONE) {
+                            if let RunKind::Bend {
+                                curved: c,
+                                pairs: p,
+                            } = bend_kind(&bend[k as usize])
+                            {
+                                (curved, pairs) = (curved || c, pairs.max(p));
+                            }
+                        }
+                        let kind = RunKind::Bend { curved, pairs };
                         let b = set.bend.len() as u32;
                         set.bend.push(batch);
                         let in_colour = set.runs.len() > first_run;
@@ -1318,6 +1321,22 @@ mod tests {
             set.distance_count,
             "a distance constraint is solved twice"
         );
+        // Every lane's pairs are solved by its run's kernel.
+        for run in &set.runs {
+            let RunKind::Bend { pairs, .. } = run.kind else {
+                continue;
+            };
+            for b in &set.bend[run.batches.0 as usize..run.batches.1 as usize] {
+                for (pair, (qa, qb)) in [(0, 1), (2, 3)].into_iter().enumerate() {
+                    if pair as u8 >= pairs {
+                        assert!(
+                            (0..LANES).all(|l| b.dw[qa][l] + b.dw[qb][l] == 0.0),
+                            "a lane's pair {pair} is in a run solving {pairs} pairs"
+                        );
+                    }
+                }
+            }
+        }
         // Nearly all of them ride with a stencil.
         assert!(
             standalone * 10 < set.distance_count,

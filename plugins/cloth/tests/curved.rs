@@ -82,8 +82,12 @@ fn a_curved_rest_shape_turned_anywhere_stays_at_rest() {
             cloth.step(DT).unwrap();
         }
         let moved = largest_move(&cloth, &turned);
+        // Turned positions are rounded to f32, so their edge lengths and bending values differ
+        // from the rest values by rounding, and the stiff constraints move the sheet by up to
+        // 0.12 mm over these 60 steps (0.000 mm for the exact half turn). Ignoring the rest
+        // frame moves it by 76 mm.
         assert!(
-            moved < 1e-4,
+            moved < 5e-4,
             "turn {k}: the rest shape moved by {:.3} mm",
             moved * 1e3
         );
