@@ -80,7 +80,7 @@ use crate::pool::{PhaseCounters, SharedSlice, WorkerPool};
 #[cfg(target_arch = "x86_64")]
 use crate::simd::Avx8;
 use crate::simd::{Baseline8, Isa, LANES, Lanes, V3, offset};
-use crate::wind::{Wind, triangle_force, triangle_force_lanes};
+use crate::wind::{Wind, triangle_force_lanes};
 
 /// Work items per block for the particles' part of a substep (prediction, tethers,
 /// collisions): collisions make some blocks' particles several times as costly as others'
@@ -1447,40 +1447,12 @@ impl StepContext<'_> {
         let tris = &self.model.triangles;
         let lo = item * TRIANGLE_ITEM;
         let hi = (lo + TRIANGLE_ITEM).min(tris.len());
-        let k = &self.k;
-        let mut t = lo;
-        // Eight triangles at a time.
-        while t + LANES <= hi {
+        // Eight triangles at a time; a last, shorter group repeats its last triangle in the
+        // spare lanes.
+        for t in (lo..hi).step_by(LANES) {
             // SAFETY: positions and velocities are only read in this phase; the force slots
-            // of triangles `t..t + 8` belong to this item.
-            unsafe { aero8(k.isa, self, t) };
-            t += LANES;
-        }
-        for (t, tri) in tris.iter().enumerate().take(hi).skip(t) {
-            // SAFETY: as above, for triangle `t`.
-            unsafe {
-                let p = tri.map(|v| self.xs.get(v as usize));
-                let vel = (self.vs.get(tri[0] as usize)
-                    + self.vs.get(tri[1] as usize)
-                    + self.vs.get(tri[2] as usize))
-                    * (1.0 / 3.0);
-                let centroid = (p[0] + p[1] + p[2]) * (1.0 / 3.0);
-                let mut relative = vel;
-                let mut wind_world_point = Vec3::from(centroid);
-                let mut to_local = glam::Quat::IDENTITY;
-                if let Some(f) = &k.frame {
-                    relative += f.air_velocity + f.air_omega.cross(centroid);
-                    wind_world_point = f.motion.pose.transform_point(wind_world_point);
-                    to_local = f.motion.to_local;
-                }
-                if let Some(wind) = self.wind {
-                    relative -= Vec3A::from(to_local * wind.velocity(wind_world_point, k.time));
-                }
-                self.triangle_force.set(
-                    t,
-                    triangle_force(p, relative, k.air_density, k.drag, k.lift),
-                );
-            }
+            // of triangles `t..hi` belong to this item.
+            unsafe { aero8(self.k.isa, self, t, (hi - t).min(LANES)) };
         }
     }
 
@@ -2121,36 +2093,40 @@ fn project_on_two_balls_lanes<L: Lanes>(
     (V3::select(inside, p, q), fallback)
 }
 
-/// The aerodynamic forces of triangles `t..t + 8` ([`StepContext::aero_triangles`]).
+/// The aerodynamic forces of the `count` (1 to 8) triangles from `t` on
+/// ([`StepContext::aero_triangles`]).
 ///
 /// # Safety
 /// Positions and velocities are only read in this phase, and the force slots of these
 /// triangles belong to the calling item.
-unsafe fn aero8(isa: Isa, context: &StepContext<'_>, t: usize) {
+unsafe fn aero8(isa: Isa, context: &StepContext<'_>, t: usize, count: usize) {
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx")]
-    unsafe fn avx(context: &StepContext<'_>, t: usize) {
+    unsafe fn avx(context: &StepContext<'_>, t: usize, count: usize) {
         // SAFETY: the caller's contract.
-        unsafe { aero_with::<Avx8>(context, t) }
+        unsafe { aero_with::<Avx8>(context, t, count) }
     }
     // SAFETY: the caller's contract; AVX only where detected.
     unsafe {
         match isa {
             #[cfg(target_arch = "x86_64")]
-            Isa::Avx => avx(context, t),
-            _ => aero_with::<Baseline8>(context, t),
+            Isa::Avx => avx(context, t, count),
+            _ => aero_with::<Baseline8>(context, t, count),
         }
     }
 }
 
 #[inline(always)]
-unsafe fn aero_with<L: Lanes>(context: &StepContext<'_>, t: usize) {
+unsafe fn aero_with<L: Lanes>(context: &StepContext<'_>, t: usize, count: usize) {
     let k = &context.k;
-    let tris = &context.model.triangles[t..t + LANES];
+    // Spare lanes repeat the last triangle: the same force is stored to its slot again.
+    let mut slots = [0u32; LANES];
     let mut corners = [[0u32; LANES]; 3];
-    for (l, tri) in tris.iter().enumerate() {
-        for c in 0..3 {
-            corners[c][l] = offset(tri[c]);
+    for l in 0..LANES {
+        let triangle = t + l.min(count - 1);
+        slots[l] = offset(triangle as u32);
+        for (corner, &v) in corners.iter_mut().zip(&context.model.triangles[triangle]) {
+            corner[l] = offset(v);
         }
     }
     let (xs, vs) = (context.xs.as_ptr(), context.vs.as_ptr());
@@ -2186,10 +2162,6 @@ unsafe fn aero_with<L: Lanes>(context: &StepContext<'_>, t: usize) {
             relative = relative - V3::load(&air);
         }
         let force = triangle_force_lanes(p, relative, k.air_density, k.drag, k.lift);
-        let mut slots = [0u32; LANES];
-        for (l, slot) in slots.iter_mut().enumerate() {
-            *slot = offset((t + l) as u32);
-        }
         L::scatter(context.triangle_force.as_ptr(), &slots, force);
     }
 }

@@ -19,7 +19,9 @@
 //! forces are computed once per step from the velocities at the step start and held over the
 //! substeps.
 
-use glam::{Vec3, Vec3A};
+use glam::Vec3;
+#[cfg(test)]
+use glam::Vec3A;
 
 use crate::simd::{Lanes, V3};
 
@@ -109,8 +111,9 @@ impl Wind {
     }
 }
 
-/// Aerodynamic force on one triangle (see the module documentation).
-#[inline]
+/// Aerodynamic force on one triangle (see the module documentation): the reference the
+/// solver's eight-lane [`triangle_force_lanes`] is tested against.
+#[cfg(test)]
 pub(crate) fn triangle_force(
     corners: [Vec3A; 3],
     relative_velocity: Vec3A,
