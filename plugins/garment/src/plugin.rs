@@ -20,7 +20,7 @@ use std::time::{Instant, SystemTime};
 
 use bevy::{
     asset::RenderAssetUsages,
-    mesh::{Indices, PrimitiveTopology},
+    mesh::{Indices, PrimitiveTopology, VertexAttributeValues},
     prelude::*,
     transform::TransformSystems,
 };
@@ -190,6 +190,47 @@ fn garment_mesh(
     mesh
 }
 
+/// Writes the garment's new surface and colours into `mesh` in place (its triangles do not
+/// change); rebuilds it if the mesh's data is not there to write.
+fn update_garment_mesh(
+    mesh: &mut Mesh,
+    (positions, normals): (Vec<Vec3>, Vec<Vec3>),
+    triangles: &[[u32; 3]],
+    colours: Option<&[f32]>,
+) {
+    let mut write =
+        |id, values: &mut dyn Iterator<Item = [f32; 3]>| match mesh.try_attribute_mut(id) {
+            Ok(VertexAttributeValues::Float32x3(old)) if old.len() == positions.len() => {
+                old.iter_mut().zip(values).for_each(|(o, v)| *o = v);
+                true
+            }
+            _ => false,
+        };
+    let written = write(
+        Mesh::ATTRIBUTE_POSITION.id,
+        &mut positions.iter().map(|p| p.to_array()),
+    ) && write(
+        Mesh::ATTRIBUTE_NORMAL.id,
+        &mut normals.iter().map(|n| n.to_array()),
+    );
+    let coloured = match mesh.try_attribute_mut(Mesh::ATTRIBUTE_COLOR) {
+        Ok(VertexAttributeValues::Float32x4(old)) if old.len() == positions.len() => {
+            match colours {
+                Some(strain) => old
+                    .iter_mut()
+                    .zip(strain)
+                    .for_each(|(o, &s)| *o = strain_colour(s)),
+                None => old.fill([1.0; 4]),
+            }
+            true
+        }
+        _ => false,
+    };
+    if !(written && coloured) {
+        *mesh = garment_mesh((positions, normals), triangles, colours);
+    }
+}
+
 /// The fit map's colour of a strain (%): blue (-5% and less) - white (0) - red (+10% and more).
 pub fn strain_colour(strain_pct: f32) -> [f32; 4] {
     if strain_pct >= 0.0 {
@@ -343,18 +384,21 @@ fn step_garment(
         let start = Instant::now();
         g.accumulated_s += time.delta_secs();
         let due = (g.accumulated_s / dt).floor() as u64;
-        let previous = g.previous.clone().unwrap_or_else(|| skin.clone());
+        let previous = g.previous.take().unwrap_or_else(|| skin.clone());
+        let mut pose = Vec::with_capacity(skin.len());
         let mut done = 0u64;
         for k in 0..due {
             if start.elapsed().as_secs_f32() * 1e3 > settings.budget_ms {
                 break;
             }
             let t = (k + 1) as f32 / due as f32;
-            let pose: Vec<Affine3A> = previous
-                .iter()
-                .zip(&skin)
-                .map(|(a, b)| lerp_affine(a, b, t))
-                .collect();
+            pose.clear();
+            pose.extend(
+                previous
+                    .iter()
+                    .zip(&skin)
+                    .map(|(a, b)| lerp_affine(a, b, t)),
+            );
             match g.sim.step(&pose, dt) {
                 Ok(s) => {
                     if s.reset {
@@ -384,8 +428,73 @@ fn step_garment(
             && let Some(mut mesh) = meshes.get_mut(&g.mesh)
         {
             let strain = settings.fit_map.then(|| g.sim.strain_pct());
-            *mesh = garment_mesh(g.sim.render_surface(), g.sim.triangles(), strain.as_deref());
+            update_garment_mesh(
+                &mut mesh,
+                g.sim.render_surface(),
+                g.sim.triangles(),
+                strain.as_deref(),
+            );
         }
         status.frame_ms = start.elapsed().as_secs_f32() * 1e3;
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn float3(mesh: &Mesh, id: bevy::mesh::MeshVertexAttribute) -> Vec<[f32; 3]> {
+        match mesh.attribute(id) {
+            Some(VertexAttributeValues::Float32x3(v)) => v.clone(),
+            other => panic!("{other:?}"),
+        }
+    }
+
+    #[test]
+    fn a_garment_mesh_is_updated_in_place_with_its_triangles_kept() {
+        let triangles = [[0, 1, 2], [0, 2, 3]];
+        let square = |z: f32| -> (Vec<Vec3>, Vec<Vec3>) {
+            (
+                vec![
+                    Vec3::new(0.0, 0.0, z),
+                    Vec3::new(1.0, 0.0, z),
+                    Vec3::new(1.0, 1.0, z),
+                    Vec3::new(0.0, 1.0, z),
+                ],
+                vec![Vec3::Z; 4],
+            )
+        };
+        let mut mesh = garment_mesh(square(0.0), &triangles, None);
+        update_garment_mesh(
+            &mut mesh,
+            square(0.5),
+            &triangles,
+            Some(&[10.0, 0.0, -5.0, 3.0]),
+        );
+        assert_eq!(float3(&mesh, Mesh::ATTRIBUTE_POSITION)[2], [1.0, 1.0, 0.5]);
+        assert_eq!(float3(&mesh, Mesh::ATTRIBUTE_NORMAL)[0], [0.0, 0.0, 1.0]);
+        let Some(VertexAttributeValues::Float32x4(colours)) = mesh.attribute(Mesh::ATTRIBUTE_COLOR)
+        else {
+            panic!("no colours");
+        };
+        assert_eq!(colours[0], strain_colour(10.0));
+        assert_eq!(colours[2], strain_colour(-5.0));
+        let Some(Indices::U32(indices)) = mesh.indices() else {
+            panic!("no indices");
+        };
+        assert_eq!(indices, &vec![0, 1, 2, 0, 2, 3]);
+        // The fit map turned off: white again.
+        update_garment_mesh(&mut mesh, square(0.5), &triangles, None);
+        let Some(VertexAttributeValues::Float32x4(colours)) = mesh.attribute(Mesh::ATTRIBUTE_COLOR)
+        else {
+            panic!("no colours");
+        };
+        assert!(colours.iter().all(|c| *c == [1.0; 4]));
+        // A surface of another size (a reloaded garment) rebuilds the mesh.
+        let (mut p, mut n) = square(0.0);
+        p.push(Vec3::ONE);
+        n.push(Vec3::Z);
+        update_garment_mesh(&mut mesh, (p, n), &triangles, None);
+        assert_eq!(float3(&mesh, Mesh::ATTRIBUTE_POSITION).len(), 5);
     }
 }
