@@ -31,7 +31,7 @@ use fitroom_body::{
 use fitroom_cloth::SolverSettings;
 use glam::Affine3A;
 
-use crate::sim::{GarmentSim, SimGarment};
+use crate::sim::{GarmentSim, SimGarment, lerp_affine};
 use crate::{BodySurface, BuildOptions, Pattern};
 
 /// Cloth settings (live-editable).
@@ -358,12 +358,6 @@ fn load_garment(
         Transform::IDENTITY,
         Visibility::default(),
     ));
-}
-
-fn lerp_affine(a: &Affine3A, b: &Affine3A, t: f32) -> Affine3A {
-    let (sa, ra, ta) = a.to_scale_rotation_translation();
-    let (sb, rb, tb) = b.to_scale_rotation_translation();
-    Affine3A::from_scale_rotation_translation(sa.lerp(sb, t), ra.slerp(rb, t), ta.lerp(tb, t))
 }
 
 fn step_garment(

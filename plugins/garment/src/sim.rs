@@ -192,7 +192,8 @@ const DRESS_STEPS: usize = 8;
 /// Their length, seconds.
 const DRESS_DT: f32 = 1.0 / 120.0;
 
-fn lerp_affine(a: &Affine3A, b: &Affine3A, t: f32) -> Affine3A {
+/// Blends two bone transforms by `t`: scale and translation linearly, rotation by slerp.
+pub(crate) fn lerp_affine(a: &Affine3A, b: &Affine3A, t: f32) -> Affine3A {
     let (sa, ra, ta) = a.to_scale_rotation_translation();
     let (sb, rb, tb) = b.to_scale_rotation_translation();
     Affine3A::from_scale_rotation_translation(sa.lerp(sb, t), ra.slerp(rb, t), ta.lerp(tb, t))
@@ -446,7 +447,7 @@ impl GarmentSim {
             resets: 0,
             measuring: true,
             last_targets: None,
-            pelvis: model.bones.iter().position(|b| b.name == "pelvis"),
+            pelvis: model.bone_index("pelvis"),
             render_weight: render_weights(
                 garment.positions.len(),
                 &garment.triangles,
