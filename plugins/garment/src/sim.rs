@@ -602,9 +602,9 @@ impl GarmentSim {
             self.teleports += 1;
             self.reset(skinning)?;
         }
-        self.last_targets = Some(targets.clone());
         self.solver.set_attachment_targets(&targets)?;
         let (posed, collider_shrink_m) = self.posed_colliders(skinning, &targets);
+        self.last_targets = Some(targets);
         self.set_solver_colliders(&posed)?;
         let report: StepReport = self.solver.step(dt)?;
         let mut reset = false;
