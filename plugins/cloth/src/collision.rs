@@ -59,6 +59,13 @@
 
 use glam::{Mat3A, Quat, Vec3, Vec3A};
 
+use crate::simd::{Lanes, V3};
+
+/// How far (metres) the eight-particle screen ([`SweptCollider::candidates`]) may misjudge a
+/// distance: it reorders a few additions of the one-particle test, which changes their
+/// rounding by far less than this in a collider's neighbourhood.
+const SCREEN_MARGIN: f32 = 1e-4;
+
 /// The most colliders (capsules plus lone spheres) one cloth collides with.
 pub const MAX_COLLIDERS: usize = 1024;
 
@@ -219,6 +226,31 @@ impl Shape {
         }
     }
 
+    /// [`Self::distance_normal`]'s distance for eight points at once (relative to `origin`);
+    /// it may differ from it by rounding.
+    #[inline(always)]
+    fn distance_lanes<L: Lanes>(&self, p: V3<L>) -> L {
+        let ra = L::splat(self.ra);
+        let to_a = p.dot(p).sqrt() - ra;
+        if self.sphere {
+            return to_a;
+        }
+        let axis = V3::splat(self.axis);
+        let x = p.dot(axis);
+        let radial = p - axis.scale(x);
+        let y = radial.dot(radial).sqrt();
+        let (sin, cos) = (L::splat(self.sin), L::splat(self.cos));
+        let u = x * cos - y * sin;
+        let q = p - axis.scale(L::splat(self.len));
+        let to_b = q.dot(q).sqrt() - L::splat(self.rb);
+        let side = x * sin + y * cos - ra;
+        L::select(
+            L::splat(0.0).gt(u),
+            to_a,
+            L::select(u.gt(L::splat(self.side)), to_b, side),
+        )
+    }
+
     /// Bounding box (min, max) in the simulation frame.
     fn bounds(&self) -> (Vec3A, Vec3A) {
         if self.sphere {
@@ -278,6 +310,55 @@ impl SweptCollider {
     #[inline]
     pub fn contains_point(&self, p: Vec3A) -> bool {
         self.bounds_min.cmple(p).all() && p.cmple(self.bounds_max).all()
+    }
+
+    /// Screens eight particles, each moving from `start` (at the substep start) to `now`, whose
+    /// paths began the pass inside the box from `start` to `first` (`first`: their positions at
+    /// the start of the collision pass, as [`Self::overlaps`] sees them): returns the lanes
+    /// (bit `l` for lane `l`) that [`Self::collide`] may move. Every other lane it leaves
+    /// unchanged, so only the returned ones need the one-particle test: a lane is left out only
+    /// if its path's box misses this collider's or if its path clears the collider by more than
+    /// the rounding margin. The lanes must be finite.
+    #[inline(always)]
+    pub fn candidates<L: Lanes>(
+        &self,
+        start: V3<L>,
+        first: V3<L>,
+        now: V3<L>,
+        thickness: f32,
+    ) -> u32 {
+        // The box of start..first meets the collider's box (min/max of two finite values
+        // compared with a bound: either one compared). (No closures: they would not inherit
+        // the caller's target features.)
+        let (lo, hi) = (
+            V3::<L>::splat(self.bounds_min),
+            V3::<L>::splat(self.bounds_max),
+        );
+        let overlap =
+            lo.x.le(start.x)
+                .or(lo.x.le(first.x))
+                .and(lo.y.le(start.y).or(lo.y.le(first.y)))
+                .and(lo.z.le(start.z).or(lo.z.le(first.z)))
+                .and(start.x.le(hi.x).or(first.x.le(hi.x)))
+                .and(start.y.le(hi.y).or(first.y.le(hi.y)))
+                .and(start.z.le(hi.z).or(first.z.le(hi.z)));
+        if overlap.bits() == 0 {
+            return 0;
+        }
+        // As in `collide`: untouched when the distance at the end exceeds the relative travel.
+        let l1 = now - V3::splat(self.end.origin);
+        let s1 = self.end.distance_lanes(l1) - L::splat(thickness);
+        let d = start - V3::splat(self.start_origin);
+        let r = &self.rotation;
+        let l0 = V3::splat(r.x_axis).scale(d.x)
+            + V3::splat(r.y_axis).scale(d.y)
+            + V3::splat(r.z_axis).scale(d.z);
+        let path = l1 - l0;
+        let travel = path.dot(path).sqrt();
+        (s1 - travel)
+            .not_gt(L::splat(SCREEN_MARGIN))
+            .and(overlap)
+            .bits()
     }
 
     /// Continuous collision of one particle moving from `start` (at the substep start) to
