@@ -101,11 +101,10 @@ const TRUNK: [(&str, &str, &str, &str); 4] = [
 
 /// The names [`BodyColliders::fit`] gives its colliders, in its order.
 pub fn collider_names() -> Vec<&'static str> {
-    let mut names: Vec<&'static str> = Vec::new();
+    let mut names: Vec<&'static str> = LIMBS.iter().map(|l| l.2).collect();
     for (_, _, left, right) in TRUNK {
         names.extend([left, right]);
     }
-    names.extend(LIMBS.iter().map(|l| l.2));
     names.extend(BALLS.iter().map(|b| b.1));
     names
 }

@@ -192,3 +192,20 @@ fn round_cone_distance_agrees_with_sampled_spheres() {
     let mid = round_cone_distance(a, a, b, r1, r2);
     assert!((mid + r1).abs() < 0.01, "{mid}");
 }
+
+#[test]
+fn the_published_collider_names_are_the_fitted_ones() {
+    // Garment files name the colliders they ignore and are checked against
+    // `collider_names()`: it must list what `fit` makes, in its order.
+    let m = model();
+    let body = m.shaped(&Shape::default()).expect("shape");
+    let c = BodyColliders::fit(
+        m,
+        &body.positions,
+        &body.rest_pose,
+        &ColliderOptions::default(),
+    )
+    .expect("colliders");
+    let fitted: Vec<&str> = c.capsules.iter().map(|c| c.name).collect();
+    assert_eq!(fitted, fitroom_body::colliders::collider_names());
+}

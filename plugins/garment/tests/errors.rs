@@ -62,7 +62,7 @@ fn errors_name_file_line_and_field() {
         (
             good.replace("\"hand_r\"]", "\"hand_rr\"]"),
             "\"hand_rr\"",
-            "ignore_colliders[3]|no body collider \"hand_rr\"|the colliders are: pelvis left",
+            "ignore_colliders[3]|no body collider \"hand_rr\"|the colliders are: upperarm_l",
         ),
         (
             good.replace("panels: [(\"front\", 0), (\"back\", 180)]", "panels: [(\"front\", 0)]"),
