@@ -114,6 +114,9 @@ pub struct GarmentSim {
     /// The pelvis bone (a reset starts from the rest pose it carries).
     pelvis: Option<usize>,
     teleports: u32,
+    /// Buffers of [`GarmentSim::set_solver_colliders`], kept between steps.
+    spheres: Vec<Sphere>,
+    capsules: Vec<[u32; 2]>,
 }
 
 /// An attached vertex moving farther than this in one step means the body was teleported
@@ -454,6 +457,8 @@ impl GarmentSim {
                 &garment.attached,
             ),
             teleports: 0,
+            spheres: Vec::new(),
+            capsules: Vec::new(),
         })
     }
 
@@ -517,8 +522,9 @@ impl GarmentSim {
 
     /// Gives the solver `posed` colliders as spheres and the capsules joining them.
     fn set_solver_colliders(&mut self, posed: &[(Vec3, Vec3, f32, f32)]) -> Result<(), SimError> {
-        let mut spheres = Vec::with_capacity(2 * posed.len());
-        let mut capsules = Vec::with_capacity(posed.len());
+        let (spheres, capsules) = (&mut self.spheres, &mut self.capsules);
+        spheres.clear();
+        capsules.clear();
         for &(a, b, ra, rb) in posed {
             let i = spheres.len() as u32;
             spheres.push(Sphere::new(a, ra));
@@ -527,7 +533,7 @@ impl GarmentSim {
                 capsules.push([i, i + 1]);
             }
         }
-        self.solver.set_colliders(&spheres, &capsules)?;
+        self.solver.set_colliders(spheres, capsules)?;
         Ok(())
     }
 
