@@ -3,9 +3,10 @@
 //! garments the kiosk ships. After every 120 Hz step: no NaN, no simulated particle more than
 //! 5 mm inside a body collider, no tether past 110 % of its rest length, no blow-up reset.
 //!
-//! Every shipped garment ignores the forearm and hand colliders (its file says so): a forearm
-//! swept through the chest would otherwise pin the cloth inside the trunk and tear it (the
-//! T-shirt did, with stretch resets from the first swing, before it ignored them).
+//! Every garment of this test ignores the forearm and hand colliders (its file says so): a
+//! forearm swept through the chest would otherwise pin the cloth inside the trunk and tear it
+//! (the T-shirt did, with stretch resets from the first swing, before it ignored them).
+//! Penetration is measured against the colliders a garment keeps.
 
 use fitroom::cloth_cli::{STEP_HZ, load_garment};
 use fitroom_body::{BodyModel, Shape};

@@ -61,9 +61,10 @@ use glam::{Mat3A, Quat, Vec3, Vec3A};
 
 use crate::simd::{Lanes, V3};
 
-/// How far (metres) the eight-particle screen ([`SweptCollider::candidates`]) may misjudge a
-/// distance: it reorders a few additions of the one-particle test, which changes their
-/// rounding by far less than this in a collider's neighbourhood.
+/// Headroom (metres) of the eight-particle screen ([`SweptCollider::candidates`]): it keeps a
+/// lane whose path clears a collider by less than this, although it computes the clearance
+/// with the one-particle test's operations in the same order (the same bits with glam's SSE2
+/// vectors), so that another order of additions (another glam backend) cannot drop a lane.
 const SCREEN_MARGIN: f32 = 1e-4;
 
 /// The most colliders (capsules plus lone spheres) one cloth collides with.

@@ -389,6 +389,9 @@ struct StepConstants {
     max_velocity: f32,
     frame: Option<FrameTerms>,
     colliders: usize,
+    /// Whether eight particles at a time are screened against each collider (always, except in
+    /// the test that compares the two paths).
+    group_collisions: bool,
     // Aerodynamics.
     air_density: f32,
     drag: f32,
@@ -422,6 +425,9 @@ pub struct ClothSolver {
     /// Positions in solver order, then one padding particle per constraint item.
     xs: Vec<Vec3A>,
     xs_prev: Vec<Vec3A>,
+    /// Velocities in solver order, as the step's last substep leaves them (within a step the
+    /// eight-particle kernel does not store them: the next substep derives them from the
+    /// positions).
     vs: Vec<Vec3A>,
     external: Vec<Vec3A>,
     external_dirty: bool,
@@ -456,6 +462,8 @@ pub struct ClothSolver {
     /// Steps since the last stalled one (see `SOLO_STEPS`).
     since_stall: u32,
     isa: Isa,
+    /// See `StepConstants::group_collisions`.
+    group_collisions: bool,
     counters: PhaseCounters,
     phases: Vec<Phase>,
     phase_items: Vec<u32>,
@@ -641,6 +649,7 @@ impl ClothSolver {
             solo_steps: 0,
             since_stall: u32::MAX,
             isa: Isa::detect(),
+            group_collisions: true,
             counters: PhaseCounters::new(),
             phases: Vec::new(),
             phase_items: Vec::new(),
@@ -1004,6 +1013,7 @@ impl ClothSolver {
             max_velocity: settings.max_velocity_m_s.unwrap_or(f32::INFINITY),
             frame,
             colliders: self.capsules.len() + self.solo_spheres.len(),
+            group_collisions: self.group_collisions,
             air_density: settings.air_density_kg_m3,
             drag: fabric.drag_coefficient,
             lift: fabric.lift_coefficient,
@@ -1723,34 +1733,46 @@ impl StepContext<'_> {
             colliders,
             near,
             planes,
-            any_plane: all_planes && !self.planes.is_empty() || plane_count > 0,
+            any_plane: plane_count > 0,
             shapes,
         };
+        let group = k.group_collisions && near.is_none_or(|n| !n.is_empty());
         let mut i = range.start;
         while i < range.end {
             // Eight free particles: screened against each collider together, so that only
             // the particles a collider may move take the one-particle test.
-            if i + LANES <= range.end && m.inverse_mass[i..i + LANES].iter().all(|&w| w > 0.0) {
+            let eight =
+                i + LANES <= range.end && m.inverse_mass[i..i + LANES].iter().all(|&w| w > 0.0);
+            if group && eight {
                 // SAFETY: particles `i..i + 8` belong to this item.
-                let group = unsafe { self.collide_group(i, &scene) };
-                if let Some((start, p, moved)) = group {
-                    // A particle no collider moved is done unless a plane is near (its
-                    // position is unchanged, as its first pass then found nothing to repeat).
-                    let mut rest = if scene.any_plane {
-                        u32::MAX >> (32 - LANES)
-                    } else {
-                        moved
-                    };
-                    while rest != 0 {
-                        let l = rest.trailing_zeros() as usize;
-                        rest &= rest - 1;
-                        let first = Some(moved & (1 << l) != 0);
-                        // SAFETY: as above.
-                        unsafe { self.collide_particle(i + l, sub, start[l], p[l], first, &scene) };
+                match unsafe { self.collide_group(i, &scene) } {
+                    Some((start, p, moved)) => {
+                        // A particle no collider moved is done unless a plane is near (its
+                        // position is unchanged, and its first pass found nothing to repeat).
+                        let mut rest = if scene.any_plane { ALL_LANES } else { moved };
+                        while rest != 0 {
+                            let l = rest.trailing_zeros() as usize;
+                            rest &= rest - 1;
+                            let first = Some(moved & (1 << l) != 0);
+                            // SAFETY: as above.
+                            unsafe {
+                                self.collide_particle(i + l, sub, start[l], p[l], first, &scene)
+                            };
+                        }
                     }
-                    i += LANES;
-                    continue;
+                    // A position that is not finite: each particle on its own.
+                    None => {
+                        for i in i..i + LANES {
+                            // SAFETY: as above.
+                            unsafe {
+                                let (start, p) = (self.xs_prev.get(i), self.xs.get(i));
+                                self.collide_particle(i, sub, start, p, None, &scene);
+                            }
+                        }
+                    }
                 }
+                i += LANES;
+                continue;
             }
             if m.inverse_mass[i] != 0.0 {
                 // SAFETY: particle `i` belongs to this item.
@@ -1976,6 +1998,9 @@ impl StepContext<'_> {
     }
 }
 
+/// Every lane of a group of eight, as bits.
+const ALL_LANES: u32 = (1 << LANES) - 1;
+
 /// What the particles of one chunk collide with in one substep.
 struct Scene<'a> {
     /// The substep's colliders.
@@ -2040,7 +2065,17 @@ unsafe fn collide8_with<L: Lanes>(
 ) -> Option<u32> {
     let index: [u32; LANES] = std::array::from_fn(|l| offset(l as u32));
     // SAFETY: the caller's contract.
-    let (s, first) = unsafe { (L::gather(start, &index), L::gather(now, &index)) };
+    unsafe {
+        *start_out = std::array::from_fn(|l| *start.add(l));
+        *p = std::array::from_fn(|l| *now.add(l));
+    }
+    // SAFETY: eight positions each.
+    let (s, first) = unsafe {
+        (
+            L::gather(start_out.as_ptr(), &index),
+            L::gather(p.as_ptr(), &index),
+        )
+    };
     // (No closure: it would not inherit the caller's target features.) `|v|² · 0` is zero
     // for a finite `v` and NaN for an infinite or NaN one (or one too large to square, which
     // the one-particle path then handles too).
@@ -2052,11 +2087,6 @@ unsafe fn collide8_with<L: Lanes>(
         != 0
     {
         return None;
-    }
-    // SAFETY: as above.
-    unsafe {
-        *start_out = std::array::from_fn(|l| *start.add(l));
-        *p = std::array::from_fn(|l| *now.add(l));
     }
     let mut moved = 0u32;
     let mut lanes = first;
@@ -2255,7 +2285,6 @@ fn project_on_two_balls_lanes<L: Lanes>(
     a1: V3<L>,
     r1: L,
 ) -> (V3<L>, u32, bool) {
-    const ALL: u32 = (1 << LANES) - 1;
     let d0 = p - a0;
     let d1 = p - a1;
     let (l0, l1) = (d0.dot(d0), d1.dot(d1));
@@ -2263,7 +2292,7 @@ fn project_on_two_balls_lanes<L: Lanes>(
     let in0 = l0.le(r0r0);
     let in1 = l1.le(r1r1);
     let inside = in0.and(in1);
-    if inside.bits() == ALL {
+    if inside.bits() == ALL_LANES {
         return (p, 0, false);
     }
     let nan = l0.is_nan().or(l1.is_nan()).bits();
@@ -2276,7 +2305,7 @@ fn project_on_two_balls_lanes<L: Lanes>(
     let settled = inside.or(ok0).or(ok1);
     let mut q = V3::select(ok0, q0, V3::select(ok1, q1, p));
     let mut fallback = nan;
-    if settled.bits() != ALL {
+    if settled.bits() != ALL_LANES {
         // The circle where the spheres meet: centre a0 + along·û, radius √radius2.
         let axis = a1 - a0;
         let length2 = axis.dot(axis);
@@ -2293,7 +2322,7 @@ fn project_on_two_balls_lanes<L: Lanes>(
             .and(radius2.not_lt(L::splat(0.0)).and_not(radius2.is_nan()))
             .and(across2.gt(L::splat(1e-24) * r0r0));
         q = V3::select(settled, q, circle);
-        fallback |= !circle_ok.or(settled).bits() & ALL;
+        fallback |= !circle_ok.or(settled).bits() & ALL_LANES;
     }
     (V3::select(inside, p, q), fallback, true)
 }
@@ -2613,7 +2642,7 @@ mod tests {
     }
 
     #[test]
-    fn eight_particles_with_a_nan_go_one_by_one() {
+    fn eight_particles_with_a_nan_are_left_to_the_one_particle_path() {
         let swept = [SweptCollider::new(
             Shape::sphere(Vec3A::ZERO, 0.1),
             Shape::sphere(Vec3A::ZERO, 0.1),
@@ -2763,6 +2792,56 @@ mod tests {
     }
 
     #[test]
+    fn grouped_and_one_by_one_collisions_give_the_same_bits() {
+        // A skirt tethered to its waist, around overlapping spheres and capsules (hips, swinging
+        // thighs, pelvis) and standing on the floor: screening eight particles per collider must
+        // give the one-particle pass's positions bit for bit, through the later passes, the
+        // floor, the crease between overlapping shapes and the tether repairs.
+        let run = |group: bool, colliders: bool| {
+            let mesh = ClothMesh::cylinder(Vec3::new(0.0, 0.0, 0.0), 0.22, 0.95, 40, 30)
+                .expect("a valid skirt");
+            let top: Vec<u32> = ClothMesh::cylinder_ring(40, 30).collect();
+            let settings = SolverSettings {
+                threads: 2,
+                ..SolverSettings::default()
+            };
+            let mut cloth =
+                ClothSolver::new(&mesh, Fabric::cotton(), &top, settings).expect("a valid cloth");
+            cloth.group_collisions = group;
+            cloth
+                .set_planes(&[Plane::floor(0.0)])
+                .expect("a valid floor");
+            for step in 0..60 {
+                let swing = 0.35 * (step as f32 * 0.15).sin();
+                let spheres = [
+                    Sphere::new(Vec3::new(-0.1, 0.85, 0.0), 0.12),
+                    Sphere::new(Vec3::new(-0.1, 0.45, swing), 0.07),
+                    Sphere::new(Vec3::new(0.1, 0.85, 0.0), 0.12),
+                    Sphere::new(Vec3::new(0.1, 0.45, -swing), 0.07),
+                    Sphere::new(Vec3::new(0.0, 0.95, 0.03), 0.16),
+                    // A foot by the hem, which lies on the floor.
+                    Sphere::new(Vec3::new(0.2, 0.04, swing), 0.06),
+                ];
+                if colliders {
+                    cloth
+                        .set_colliders(&spheres, &[[0, 1], [2, 3]])
+                        .expect("valid colliders");
+                }
+                cloth.step(1.0 / 120.0).expect("a valid step");
+            }
+            cloth
+                .positions()
+                .iter()
+                .map(|p| p.to_array().map(f32::to_bits))
+                .collect::<Vec<_>>()
+        };
+        let grouped = run(true, true);
+        assert_eq!(grouped, run(false, true));
+        // The colliders did move the cloth.
+        assert_ne!(grouped, run(true, false));
+    }
+
+    #[test]
     fn eight_particles_integrate_as_one_does_in_a_moving_frame() {
         let motion = FrameMotion {
             velocity: Vec3::new(0.3, 0.0, -0.2),
@@ -2799,6 +2878,7 @@ mod tests {
                 motion,
             }),
             colliders: 0,
+            group_collisions: true,
             air_density: 0.0,
             drag: 0.0,
             lift: 0.0,
