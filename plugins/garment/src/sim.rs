@@ -18,7 +18,7 @@ use glam::{Affine3A, Vec3};
 use serde::Serialize;
 
 use fitroom_body::colliders::{BodyColliders, ColliderOptions, round_cone_distance};
-use fitroom_body::{BodyModel, RestPose};
+use fitroom_body::{BodyModel, MeshGraph, RestPose, SegmentError};
 use fitroom_cloth::{
     ClothError, ClothMesh, ClothSolver, Fabric, Health, Plane, SolverSettings, Sphere, StepReport,
 };
@@ -71,6 +71,8 @@ pub enum SimError {
     Bones { got: usize, expected: usize },
     #[error("the garment ignores a body collider \"{0}\" that the body does not have")]
     UnknownCollider(String),
+    #[error("garment mesh: {0}")]
+    Mesh(#[from] SegmentError),
 }
 
 /// Per-step figures.
@@ -144,50 +146,14 @@ pub const RENDER_OFFSET_M: f32 = 0.025;
 /// Edges over which that offset blends in from the attached part.
 pub const RENDER_RAMP_EDGES: u32 = 4;
 
-/// Per vertex of an `n`-vertex mesh: its neighbours along the triangles' edges, sorted, once
-/// each (indices out of range are skipped).
-fn vertex_neighbours(n: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
-    let mut neighbours: Vec<Vec<u32>> = vec![Vec::new(); n];
-    for t in triangles {
-        for k in 0..3 {
-            let (a, b) = (t[k] as usize, t[(k + 1) % 3] as usize);
-            if a < n && b < n {
-                neighbours[a].push(b as u32);
-                neighbours[b].push(a as u32);
-            }
-        }
+/// Per vertex of `graph`: `min(1, edges to the nearest attached vertex / RENDER_RAMP_EDGES)`
+/// (1 without attached vertices).
+fn render_weights(graph: &MeshGraph, attached: &[u32]) -> Result<Vec<f32>, SegmentError> {
+    let mut weights = vec![1.0f32; graph.vertex_count()];
+    for (v, hops) in graph.hops_from(attached, RENDER_RAMP_EDGES)? {
+        weights[v as usize] = hops as f32 / RENDER_RAMP_EDGES as f32;
     }
-    for list in &mut neighbours {
-        list.sort_unstable();
-        list.dedup();
-    }
-    neighbours
-}
-
-/// Per vertex: `min(1, edges to the nearest attached vertex / RENDER_RAMP_EDGES)` (1 without
-/// attached vertices).
-fn render_weights(n: usize, triangles: &[[u32; 3]], attached: &[u32]) -> Vec<f32> {
-    let neighbours = vertex_neighbours(n, triangles);
-    let mut hops = vec![u32::MAX; n];
-    let mut queue = std::collections::VecDeque::new();
-    for &a in attached {
-        if let Some(h) = hops.get_mut(a as usize) {
-            *h = 0;
-            queue.push_back(a as usize);
-        }
-    }
-    while let Some(v) = queue.pop_front() {
-        for &u in &neighbours[v] {
-            let u = u as usize;
-            if hops[u] == u32::MAX {
-                hops[u] = hops[v] + 1;
-                queue.push_back(u);
-            }
-        }
-    }
-    hops.into_iter()
-        .map(|h| (h as f32 / RENDER_RAMP_EDGES as f32).min(1.0))
-        .collect()
+    Ok(weights)
 }
 
 /// Steps a reset takes to move the garment from the rest pose into the body's pose.
@@ -278,7 +244,7 @@ pub fn fit_to_anchors(
 /// four largest and renormalised.
 fn smooth_skin(
     skin: Vec<([u16; 4], [f32; 4])>,
-    triangles: &[[u32; 3]],
+    graph: &MeshGraph,
     bones: usize,
     passes: usize,
 ) -> Vec<([u16; 4], [f32; 4])> {
@@ -291,14 +257,14 @@ fn smooth_skin(
             }
         }
     }
-    let neighbours = vertex_neighbours(n, triangles);
     let mut next = dense.clone();
     for _ in 0..passes {
         for v in 0..n {
-            let count = (neighbours[v].len() + 1) as f32;
+            let neighbours = graph.neighbours(v);
+            let count = (neighbours.len() + 1) as f32;
             for b in 0..bones {
                 let mut sum = dense[v * bones + b];
-                for &u in &neighbours[v] {
+                for &u in neighbours {
                     sum += dense[u as usize * bones + b];
                 }
                 next[v * bones + b] = sum / count;
@@ -412,27 +378,30 @@ impl GarmentSim {
         // a pose): the attached ones follow the body with it, and a reset puts the whole garment
         // where the skinned body is, outside it as it was placed.
         let body = &body_positions[..model.body_vertex_count as usize];
+        let graph = MeshGraph::new(garment.positions.len(), &garment.triangles)?;
         let skin = smooth_skin(
             nearest(body, &garment.positions)
                 .into_iter()
                 .map(|v| (model.skin_joints[v], model.skin_weights[v]))
                 .collect(),
-            &garment.triangles,
+            &graph,
             model.bones.len(),
             SKIN_SMOOTHING,
         );
-        let mut edges: Vec<(u32, u32, f32)> = Vec::new();
-        for t in &garment.triangles {
-            for k in 0..3 {
-                let (a, b) = (t[k].min(t[(k + 1) % 3]), t[k].max(t[(k + 1) % 3]));
-                edges.push((a, b, 0.0));
-            }
-        }
-        edges.sort_by_key(|e| (e.0, e.1));
-        edges.dedup_by_key(|e| (e.0, e.1));
-        for e in &mut edges {
-            e.2 = garment.positions[e.0 as usize].distance(garment.positions[e.1 as usize]);
-        }
+        // Each edge once, as (lower vertex, higher vertex, rest length), in that order.
+        let edges: Vec<(u32, u32, f32)> = (0..graph.vertex_count())
+            .flat_map(|a| {
+                graph
+                    .neighbours(a)
+                    .iter()
+                    .filter(move |&&b| b as usize > a)
+                    .map(move |&b| (a as u32, b))
+            })
+            .map(|(a, b)| {
+                let rest = garment.positions[a as usize].distance(garment.positions[b as usize]);
+                (a, b, rest)
+            })
+            .collect();
         Ok(Self {
             solver,
             rest: garment.positions.clone(),
@@ -451,11 +420,7 @@ impl GarmentSim {
             measuring: true,
             last_targets: None,
             pelvis: model.bone_index("pelvis"),
-            render_weight: render_weights(
-                garment.positions.len(),
-                &garment.triangles,
-                &garment.attached,
-            ),
+            render_weight: render_weights(&graph, &garment.attached)?,
             teleports: 0,
             spheres: Vec::new(),
             capsules: Vec::new(),
@@ -758,15 +723,19 @@ mod tests {
             triangles.push([a, b, d]);
             triangles.push([a, d, c]);
         }
-        let w = render_weights(16, &triangles, &[0, 8]);
+        // One more vertex in no triangle.
+        let graph = MeshGraph::new(17, &triangles).expect("a valid mesh");
+        let w = render_weights(&graph, &[0, 8]).expect("valid attachments");
         let expected = |i: u32| (i as f32 / RENDER_RAMP_EDGES as f32).min(1.0);
         for i in 0..8u32 {
             assert_eq!(w[i as usize], expected(i), "top {i}");
             assert_eq!(w[i as usize + 8], expected(i), "bottom {i}");
         }
-        // Nothing attached: drawn out everywhere; an isolated vertex too.
+        assert_eq!(w[16], 1.0, "the isolated vertex");
+        // Nothing attached: drawn out everywhere.
         assert!(
-            render_weights(16, &triangles, &[])
+            render_weights(&graph, &[])
+                .expect("no attachments")
                 .iter()
                 .all(|&x| x == 1.0)
         );
