@@ -374,6 +374,12 @@ fn horizontal(v: Vec3) -> Vec3 {
 }
 
 impl Leg {
+    /// Where the ankle is with the hip at `hip` and the thigh and shin turned by `rot[0]` and
+    /// `rot[1]` (bones along +Y).
+    fn ankle(&self, hip: Vec3, rot: &[Quat; 3]) -> Vec3 {
+        hip + rot[0] * Vec3::Y * self.upper_len + rot[1] * Vec3::Y * self.lower_len
+    }
+
     fn new(skeleton: &AvatarSkeleton, foot: Foot) -> Result<Self, FootSkateError> {
         let find = |base: &str| {
             let name = format!("{base}{}", foot.suffix());
@@ -587,7 +593,7 @@ impl FootSkateCorrector {
         }
         let leg = &self.legs[k];
         let hip = pose.heads[leg.thigh] + root_offset;
-        let ankle = hip + rot[0] * Vec3::Y * leg.upper_len + rot[1] * Vec3::Y * leg.lower_len;
+        let ankle = leg.ankle(hip, rot);
         // Heights here are above the floor the output stands on (the pose is already shifted).
         let sole = leg.sole(ankle, rot[2], floor_y);
         let margin = o.min_height_margin_m;
@@ -856,8 +862,7 @@ impl FootSkateCorrector {
             if want[k] && state.lock.is_none() {
                 let rot = &out_rot[k];
                 let hip = pose.heads[leg.thigh] + root_offset;
-                let ankle =
-                    hip + rot[0] * Vec3::Y * leg.upper_len + rot[1] * Vec3::Y * leg.lower_len;
+                let ankle = leg.ankle(hip, rot);
                 let pivot = contacts[k].pivot;
                 state.lock = Some(Lock {
                     point: ankle + rot[2] * leg.contact_offset(pivot),
@@ -914,7 +919,7 @@ impl FootSkateCorrector {
                         remaining: 1.0,
                     });
                     state.foot_rotation = None;
-                    out_rot[k] = self.free_leg(k, pose, root_offset);
+                    // (Its leg is posed free by the final pass below.)
                     self.stats.drift_releases += 1;
                     continue;
                 }
