@@ -64,7 +64,7 @@ use crate::order::ParticleOrder;
 use crate::pool::SharedSlice;
 #[cfg(target_arch = "x86_64")]
 use crate::simd::Avx8;
-use crate::simd::{Baseline8, Isa, LANES, Lanes, V3, offset};
+use crate::simd::{Baseline8, Isa, LANES, Lanes, V3, dispatch_lanes, offset};
 
 /// Open batches the packer may still add to (a window over the constraint order).
 const PACK_WINDOW: usize = 32;
@@ -879,29 +879,17 @@ pub(crate) unsafe fn solve_distance(
     inv_h2: f32,
     first: bool,
 ) {
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn avx(
-        batches: &[DistanceBatch],
-        inverse_denominator: &[[f32; LANES]],
-        lambda: Option<(&SharedSlice<'_, [f32; LANES]>, usize)>,
-        x: *mut Vec3A,
-        inv_h2: f32,
-        first: bool,
-    ) {
-        // SAFETY: the caller's contract.
-        unsafe { distance_kernel::<Avx8>(batches, inverse_denominator, lambda, x, inv_h2, first) }
-    }
-    // SAFETY: the caller's contract; AVX only where detected.
-    unsafe {
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => avx(batches, inverse_denominator, lambda, x, inv_h2, first),
-            _ => {
-                distance_kernel::<Baseline8>(batches, inverse_denominator, lambda, x, inv_h2, first)
-            }
-        }
-    }
+    dispatch_lanes!(
+        isa,
+        distance_kernel(
+            batches: &[DistanceBatch],
+            inverse_denominator: &[[f32; LANES]],
+            lambda: Option<(&SharedSlice<'_, [f32; LANES]>, usize)>,
+            x: *mut Vec3A,
+            inv_h2: f32,
+            first: bool,
+        )
+    )
 }
 
 #[inline(always)]

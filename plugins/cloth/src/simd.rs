@@ -940,6 +940,31 @@ impl Isa {
     }
 }
 
+/// Calls the generic kernel `$kernel::<L>(args)` with the lanes `isa` names: the AVX one
+/// through a wrapper compiled with AVX enabled (the kernel is `#[inline(always)]`, so it is
+/// compiled with AVX inside it), the baseline one directly. The arguments are given with their
+/// types, as for a function; the expansion is an unsafe call (the kernel's contract is the
+/// caller's).
+macro_rules! dispatch_lanes {
+    ($isa:expr, $kernel:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?) => {{
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = "avx")]
+        unsafe fn avx($($arg: $ty),*) $(-> $ret)? {
+            // SAFETY: the caller's contract.
+            unsafe { $kernel::<$crate::simd::Avx8>($($arg),*) }
+        }
+        // SAFETY: the caller's contract; AVX only where detected.
+        unsafe {
+            match $isa {
+                #[cfg(target_arch = "x86_64")]
+                $crate::simd::Isa::Avx => avx($($arg),*),
+                _ => $kernel::<$crate::simd::Baseline8>($($arg),*),
+            }
+        }
+    }};
+}
+pub(crate) use dispatch_lanes;
+
 /// The baseline [`Lanes`] of this architecture.
 #[cfg(target_arch = "x86_64")]
 pub(crate) type Baseline8 = Sse8;

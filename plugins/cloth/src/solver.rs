@@ -77,9 +77,7 @@ use crate::frame::{FrameInertia, FrameMotion, FrameState, RigidPose};
 use crate::mesh::{ClothMesh, MeshTopology};
 use crate::order::ParticleOrder;
 use crate::pool::{PhaseCounters, SharedSlice, WorkerPool};
-#[cfg(target_arch = "x86_64")]
-use crate::simd::Avx8;
-use crate::simd::{Baseline8, Isa, LANES, Lanes, V3, offset};
+use crate::simd::{Isa, LANES, Lanes, V3, dispatch_lanes, offset};
 use crate::wind::{Wind, triangle_force_lanes};
 
 /// Work items per block for the particles' part of a substep (prediction, tethers,
@@ -2033,26 +2031,16 @@ unsafe fn collide8(
     contact: (f32, f32),
     out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES]),
 ) -> Option<u32> {
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn avx(
-        start: *const Vec3A,
-        now: *const Vec3A,
-        scene: &Scene<'_>,
-        contact: (f32, f32),
-        out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES]),
-    ) -> Option<u32> {
-        // SAFETY: the caller's contract.
-        unsafe { collide8_with::<Avx8>(start, now, scene, contact, out) }
-    }
-    // SAFETY: the caller's contract; AVX only where detected.
-    unsafe {
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => avx(start, now, scene, contact, out),
-            _ => collide8_with::<Baseline8>(start, now, scene, contact, out),
-        }
-    }
+    dispatch_lanes!(
+        isa,
+        collide8_with(
+            start: *const Vec3A,
+            now: *const Vec3A,
+            scene: &Scene<'_>,
+            contact: (f32, f32),
+            out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES]),
+        ) -> Option<u32>
+    )
 }
 
 #[inline(always)]
@@ -2222,26 +2210,16 @@ unsafe fn two_tethers(
     limits: &[f32],
     before: &mut [Vec3A; LANES],
 ) -> u32 {
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn avx(
-        x: *mut Vec3A,
-        anchors: *const Vec3A,
-        slots: &[u32],
-        limits: &[f32],
-        before: &mut [Vec3A; LANES],
-    ) -> u32 {
-        // SAFETY: the caller's contract.
-        unsafe { two_tethers_with::<Avx8>(x, anchors, slots, limits, before) }
-    }
-    // SAFETY: the caller's contract; AVX only where detected.
-    unsafe {
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => avx(x, anchors, slots, limits, before),
-            _ => two_tethers_with::<Baseline8>(x, anchors, slots, limits, before),
-        }
-    }
+    dispatch_lanes!(
+        isa,
+        two_tethers_with(
+            x: *mut Vec3A,
+            anchors: *const Vec3A,
+            slots: &[u32],
+            limits: &[f32],
+            before: &mut [Vec3A; LANES],
+        ) -> u32
+    )
 }
 
 #[inline(always)]
@@ -2334,20 +2312,7 @@ fn project_on_two_balls_lanes<L: Lanes>(
 /// Positions and velocities are only read in this phase, and the force slots of these
 /// triangles belong to the calling item.
 unsafe fn aero8(isa: Isa, context: &StepContext<'_>, t: usize, count: usize) {
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn avx(context: &StepContext<'_>, t: usize, count: usize) {
-        // SAFETY: the caller's contract.
-        unsafe { aero_with::<Avx8>(context, t, count) }
-    }
-    // SAFETY: the caller's contract; AVX only where detected.
-    unsafe {
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => avx(context, t, count),
-            _ => aero_with::<Baseline8>(context, t, count),
-        }
-    }
+    dispatch_lanes!(isa, aero_with(context: &StepContext<'_>, t: usize, count: usize))
 }
 
 #[inline(always)]
@@ -2423,20 +2388,10 @@ fn predict_velocity(k: &StepConstants, p: Vec3A, vel: Vec3A, external: Vec3A) ->
 /// The eight particles belong to the calling item.
 #[inline]
 unsafe fn integrate_free(isa: Isa, x: [*mut Vec3A; 2], external: *const Vec3A, k: &StepConstants) {
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn avx(x: [*mut Vec3A; 2], external: *const Vec3A, k: &StepConstants) {
-        // SAFETY: the caller's contract.
-        unsafe { integrate_free_with::<Avx8>(x, external, k) }
-    }
-    // SAFETY: the caller's contract; AVX only where detected.
-    unsafe {
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => avx(x, external, k),
-            _ => integrate_free_with::<Baseline8>(x, external, k),
-        }
-    }
+    dispatch_lanes!(
+        isa,
+        integrate_free_with(x: [*mut Vec3A; 2], external: *const Vec3A, k: &StepConstants)
+    )
 }
 
 #[inline(always)]
@@ -2517,6 +2472,7 @@ mod tests {
     }
 
     use super::*;
+    use crate::simd::Baseline8;
 
     fn random(seed: &mut u32) -> f32 {
         *seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
