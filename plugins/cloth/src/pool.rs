@@ -310,8 +310,8 @@ impl PhaseCounters {
     /// (the same blocks of particles, still in its cache) substep after substep, while the
     /// items left over go to whichever thread is free.
     ///
-    /// Returns how long this thread waited for other threads to finish phases, and the
-    /// longest it spent in one item (an item normally takes microseconds; one that took
+    /// Returns how long this thread waited for other threads to finish phases, and (with more
+    /// than one thread) the longest it spent in one item (an item normally takes microseconds; one that took
     /// milliseconds was descheduled by the operating system while the thread held it).
     pub fn run_phases(
         &self,
@@ -351,9 +351,12 @@ impl PhaseCounters {
                     continue;
                 }
                 let guard = AbortOnUnwind(&self.abort);
-                let start = std::time::Instant::now();
+                // Only a thread that others may wait for is timed (two clock reads an item).
+                let start = (threads > 1).then(std::time::Instant::now);
                 exec(p, k as u32);
-                times.longest_item = times.longest_item.max(start.elapsed());
+                if let Some(start) = start {
+                    times.longest_item = times.longest_item.max(start.elapsed());
+                }
                 std::mem::forget(guard);
                 completed += 1;
             }

@@ -389,6 +389,7 @@ struct StepConstants {
     colliders: usize,
     /// Whether eight particles at a time are screened against each collider (always, except in
     /// the test that compares the two paths).
+    #[cfg(test)]
     group_collisions: bool,
     // Aerodynamics.
     air_density: f32,
@@ -461,6 +462,7 @@ pub struct ClothSolver {
     since_stall: u32,
     isa: Isa,
     /// See `StepConstants::group_collisions`.
+    #[cfg(test)]
     group_collisions: bool,
     counters: PhaseCounters,
     phases: Vec<Phase>,
@@ -647,6 +649,7 @@ impl ClothSolver {
             solo_steps: 0,
             since_stall: u32::MAX,
             isa: Isa::detect(),
+            #[cfg(test)]
             group_collisions: true,
             counters: PhaseCounters::new(),
             phases: Vec::new(),
@@ -1011,6 +1014,7 @@ impl ClothSolver {
             max_velocity: settings.max_velocity_m_s.unwrap_or(f32::INFINITY),
             frame,
             colliders: self.capsules.len() + self.solo_spheres.len(),
+            #[cfg(test)]
             group_collisions: self.group_collisions,
             air_density: settings.air_density_kg_m3,
             drag: fabric.drag_coefficient,
@@ -1734,7 +1738,11 @@ impl StepContext<'_> {
             any_plane: plane_count > 0,
             shapes,
         };
-        let group = k.group_collisions && near.is_none_or(|n| !n.is_empty());
+        #[cfg(test)]
+        let screen = k.group_collisions;
+        #[cfg(not(test))]
+        let screen = true;
+        let group = screen && near.is_none_or(|n| !n.is_empty());
         let mut i = range.start;
         while i < range.end {
             // Eight free particles: screened against each collider together, so that only
