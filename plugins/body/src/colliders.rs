@@ -299,18 +299,23 @@ impl BodyColliders {
     /// space, one per bone, as [`crate::skinning::skinning_matrices`] gives): `(a, b,
     /// radius_a, radius_b)` per capsule.
     pub fn posed(&self, skinning: &[Affine3A]) -> Vec<(Vec3, Vec3, f32, f32)> {
-        self.capsules
-            .iter()
-            .map(|c| {
-                let m = skinning.get(c.bone).copied().unwrap_or(Affine3A::IDENTITY);
-                (
-                    m.transform_point3(c.a),
-                    m.transform_point3(c.b),
-                    c.radius_a,
-                    c.radius_b,
-                )
-            })
-            .collect()
+        let mut out = Vec::with_capacity(self.capsules.len());
+        self.posed_into(skinning, &mut out);
+        out
+    }
+
+    /// [`Self::posed`] into `out` (cleared first), to reuse its storage step after step.
+    pub fn posed_into(&self, skinning: &[Affine3A], out: &mut Vec<(Vec3, Vec3, f32, f32)>) {
+        out.clear();
+        out.extend(self.capsules.iter().map(|c| {
+            let m = skinning.get(c.bone).copied().unwrap_or(Affine3A::IDENTITY);
+            (
+                m.transform_point3(c.a),
+                m.transform_point3(c.b),
+                c.radius_a,
+                c.radius_b,
+            )
+        }));
     }
 
     /// Signed distance from `p` to the union of the capsules at rest (negative inside).

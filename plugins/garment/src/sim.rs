@@ -119,6 +119,10 @@ pub struct GarmentSim {
     /// Buffers of [`GarmentSim::set_solver_colliders`], kept between steps.
     spheres: Vec<Sphere>,
     capsules: Vec<[u32; 2]>,
+    /// Buffers of [`GarmentSim::step`]: the posed colliders, and the attachment targets of the
+    /// step before the last one.
+    posed: Vec<(Vec3, Vec3, f32, f32)>,
+    spare_targets: Vec<Vec3>,
 }
 
 /// An attached vertex moving farther than this in one step means the body was teleported
@@ -424,6 +428,8 @@ impl GarmentSim {
             teleports: 0,
             spheres: Vec::new(),
             capsules: Vec::new(),
+            posed: Vec::new(),
+            spare_targets: Vec::new(),
         })
     }
 
@@ -503,10 +509,19 @@ impl GarmentSim {
     }
 
     fn anchors(&self, skinning: &[Affine3A]) -> Vec<Vec3> {
-        self.attached
-            .iter()
-            .map(|&v| self.skin_point(v as usize, skinning))
-            .collect()
+        let mut out = Vec::with_capacity(self.attached.len());
+        self.anchors_into(skinning, &mut out);
+        out
+    }
+
+    /// [`Self::anchors`] into `out` (cleared first).
+    fn anchors_into(&self, skinning: &[Affine3A], out: &mut Vec<Vec3>) {
+        out.clear();
+        out.extend(
+            self.attached
+                .iter()
+                .map(|&v| self.skin_point(v as usize, skinning)),
+        );
     }
 
     /// Puts the garment on the body posed by `skinning`, at rest.
@@ -561,7 +576,8 @@ impl GarmentSim {
     pub fn step(&mut self, skinning: &[Affine3A], dt: f32) -> Result<SimStep, SimError> {
         self.check(skinning)?;
         let start = std::time::Instant::now();
-        let targets = self.anchors(skinning);
+        let mut targets = std::mem::take(&mut self.spare_targets);
+        self.anchors_into(skinning, &mut targets);
         let jumped = self.last_targets.as_ref().is_some_and(|last| {
             last.iter()
                 .zip(&targets)
@@ -574,8 +590,12 @@ impl GarmentSim {
             self.reset(skinning)?;
         }
         self.solver.set_attachment_targets(&targets)?;
-        let (posed, collider_shrink_m) = self.posed_colliders(skinning, &targets);
-        self.last_targets = Some(targets);
+        let mut posed = std::mem::take(&mut self.posed);
+        self.colliders.posed_into(skinning, &mut posed);
+        let collider_shrink_m = fit_to_anchors(&mut posed, &targets, BODY_SKIN_OFFSET_M);
+        if let Some(old) = self.last_targets.replace(targets) {
+            self.spare_targets = old;
+        }
         self.set_solver_colliders(&posed)?;
         let report: StepReport = self.solver.step(dt)?;
         let mut reset = false;
@@ -588,13 +608,11 @@ impl GarmentSim {
         }
         let solve_ms = start.elapsed().as_secs_f64() * 1e3;
         let (max_penetration_m, max_strain_pct) = if self.measuring {
-            (
-                self.deepest(&posed),
-                self.strain_pct().into_iter().fold(0.0, f32::max),
-            )
+            (self.deepest(&posed), self.max_strain_pct())
         } else {
             (0.0, 0.0)
         };
+        self.posed = posed;
         Ok(SimStep {
             collider_shrink_m,
             blow_up,
@@ -692,22 +710,37 @@ impl GarmentSim {
         self.solver
             .positions()
             .iter()
-            .map(|&q| {
-                posed
-                    .iter()
-                    .map(|&(a, b, ra, rb)| round_cone_distance(q.into(), a, b, ra, rb))
-                    .fold(f32::INFINITY, f32::min)
-            })
+            .map(|&q| gap(q.into(), posed))
             .collect()
     }
 
     fn deepest(&self, posed: &[(Vec3, Vec3, f32, f32)]) -> f32 {
-        self.gaps(posed)
-            .into_iter()
+        self.solver
+            .positions()
+            .iter()
             .enumerate()
             .filter(|(i, _)| self.attached.binary_search(&(*i as u32)).is_err())
-            .fold(0.0f32, |m, (_, d)| m.max(-d))
+            .fold(0.0f32, |m, (_, &q)| m.max(-gap(q.into(), posed)))
     }
+
+    /// The largest edge stretch over its rest length, % (0 if no edge is stretched): the
+    /// largest of [`Self::strain_pct`].
+    fn max_strain_pct(&self) -> f32 {
+        let p = self.solver.positions();
+        self.edges
+            .iter()
+            .filter(|e| e.2 > 0.0)
+            .map(|&(a, b, rest)| (p[a as usize].distance(p[b as usize]) / rest - 1.0) * 100.0)
+            .fold(0.0, f32::max)
+    }
+}
+
+/// Signed distance from `q` to the nearest of the `posed` colliders (negative inside).
+fn gap(q: Vec3, posed: &[(Vec3, Vec3, f32, f32)]) -> f32 {
+    posed
+        .iter()
+        .map(|&(a, b, ra, rb)| round_cone_distance(q, a, b, ra, rb))
+        .fold(f32::INFINITY, f32::min)
 }
 
 #[cfg(test)]
