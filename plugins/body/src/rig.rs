@@ -142,7 +142,15 @@ impl BodyModel {
 /// length is twice its area, to its three corners. One normal per position; vertices in no
 /// triangle (or only degenerate ones) get zero. Triangles indexing past `positions` are skipped.
 pub fn compute_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> {
-    let mut normals = vec![Vec3::ZERO; positions.len()];
+    let mut normals = Vec::new();
+    compute_normals_into(positions, triangles, &mut normals);
+    normals
+}
+
+/// [`compute_normals`] into `normals` (cleared first), to reuse its storage frame after frame.
+pub fn compute_normals_into(positions: &[Vec3], triangles: &[[u32; 3]], normals: &mut Vec<Vec3>) {
+    normals.clear();
+    normals.resize(positions.len(), Vec3::ZERO);
     for t in triangles {
         let [a, b, c] = t.map(|i| i as usize);
         let (Some(&pa), Some(&pb), Some(&pc)) =
@@ -155,10 +163,9 @@ pub fn compute_normals(positions: &[Vec3], triangles: &[[u32; 3]]) -> Vec<Vec3> 
         normals[b] += n;
         normals[c] += n;
     }
-    for n in &mut normals {
+    for n in normals.iter_mut() {
         *n = n.normalize_or_zero();
     }
-    normals
 }
 
 #[cfg(test)]

@@ -91,6 +91,8 @@ pub struct WornGarment {
     mesh: Handle<Mesh>,
     accumulated_s: f32,
     previous: Option<Vec<Affine3A>>,
+    /// The drawn surface (positions, normals), kept between frames.
+    surface: (Vec<Vec3>, Vec<Vec3>),
 }
 
 /// Where the garment file was when loaded, to notice edits.
@@ -165,7 +167,7 @@ fn skinning(body: &AvatarBody, joints: &Query<(&AvatarJoint, &GlobalTransform)>)
 }
 
 fn garment_mesh(
-    (positions, normals): (Vec<Vec3>, Vec<Vec3>),
+    (positions, normals): (&[Vec3], &[Vec3]),
     triangles: &[[u32; 3]],
     colours: Option<&[f32]>,
 ) -> Mesh {
@@ -194,7 +196,7 @@ fn garment_mesh(
 /// change); rebuilds it if the mesh's data is not there to write.
 fn update_garment_mesh(
     mesh: &mut Mesh,
-    (positions, normals): (Vec<Vec3>, Vec<Vec3>),
+    (positions, normals): (&[Vec3], &[Vec3]),
     triangles: &[[u32; 3]],
     colours: Option<&[f32]>,
 ) {
@@ -336,16 +338,19 @@ fn load_garment(
             mesh: Handle::default(),
             accumulated_s: 0.0,
             previous: None,
+            surface: Default::default(),
         });
         return;
     };
-    let mesh = meshes.add(garment_mesh(sim.render_surface(), sim.triangles(), None));
+    let (positions, normals) = sim.render_surface();
+    let mesh = meshes.add(garment_mesh((&positions, &normals), sim.triangles(), None));
     commands.spawn((
         WornGarment {
             sim: Box::new(sim),
             mesh: mesh.clone(),
             accumulated_s: 0.0,
             previous: None,
+            surface: Default::default(),
         },
         Mesh3d(mesh),
         MeshMaterial3d(materials.add(StandardMaterial {
@@ -413,7 +418,10 @@ fn step_garment(
         status.steps += done;
         status.dropped_steps += due - done;
         g.accumulated_s = 0.0_f32.max(g.accumulated_s - due as f32 * dt);
-        g.previous = Some(skin.clone());
+        // The buffer taken at the top of the loop keeps this frame's pose for the next.
+        let mut previous = previous;
+        previous.clone_from(&skin);
+        g.previous = Some(previous);
         status.resets = g.sim.resets();
         if cfg!(debug_assertions) && !g.sim.positions().iter().all(|p| p.is_finite()) {
             error!("garment positions are not finite after the step");
@@ -422,9 +430,12 @@ fn step_garment(
             && let Some(mut mesh) = meshes.get_mut(&g.mesh)
         {
             let strain = settings.fit_map.then(|| g.sim.strain_pct());
+            let g = &mut *g;
+            let (positions, normals) = &mut g.surface;
+            g.sim.render_surface_into(positions, normals);
             update_garment_mesh(
                 &mut mesh,
-                g.sim.render_surface(),
+                (positions, normals),
                 g.sim.triangles(),
                 strain.as_deref(),
             );
@@ -458,10 +469,11 @@ mod tests {
                 vec![Vec3::Z; 4],
             )
         };
-        let mut mesh = garment_mesh(square(0.0), &triangles, None);
+        let (flat, raised) = (square(0.0), square(0.5));
+        let mut mesh = garment_mesh((&flat.0, &flat.1), &triangles, None);
         update_garment_mesh(
             &mut mesh,
-            square(0.5),
+            (&raised.0, &raised.1),
             &triangles,
             Some(&[10.0, 0.0, -5.0, 3.0]),
         );
@@ -478,7 +490,7 @@ mod tests {
         };
         assert_eq!(indices, &vec![0, 1, 2, 0, 2, 3]);
         // The fit map turned off: white again.
-        update_garment_mesh(&mut mesh, square(0.5), &triangles, None);
+        update_garment_mesh(&mut mesh, (&raised.0, &raised.1), &triangles, None);
         let Some(VertexAttributeValues::Float32x4(colours)) = mesh.attribute(Mesh::ATTRIBUTE_COLOR)
         else {
             panic!("no colours");
@@ -488,7 +500,7 @@ mod tests {
         let (mut p, mut n) = square(0.0);
         p.push(Vec3::ONE);
         n.push(Vec3::Z);
-        update_garment_mesh(&mut mesh, (p, n), &triangles, None);
+        update_garment_mesh(&mut mesh, (&p, &n), &triangles, None);
         assert_eq!(float3(&mesh, Mesh::ATTRIBUTE_POSITION).len(), 5);
     }
 }

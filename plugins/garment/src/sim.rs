@@ -629,14 +629,26 @@ impl GarmentSim {
     /// [`RENDER_RAMP_EDGES`] edges from the attached part, which is drawn where it is. The
     /// normals are those of the simulated surface (the offset one is parallel to it).
     pub fn render_surface(&self) -> (Vec<Vec3>, Vec<Vec3>) {
-        let mut positions = self.positions();
-        let normals = fitroom_body::rig::compute_normals(&positions, &self.triangles);
-        for ((p, &n), &w) in positions.iter_mut().zip(&normals).zip(&self.render_weight) {
+        let (mut positions, mut normals) = (Vec::new(), Vec::new());
+        self.render_surface_into(&mut positions, &mut normals);
+        (positions, normals)
+    }
+
+    /// [`Self::render_surface`] into `positions` and `normals` (cleared first), to reuse their
+    /// storage frame after frame.
+    pub fn render_surface_into(&self, positions: &mut Vec<Vec3>, normals: &mut Vec<Vec3>) {
+        positions.clear();
+        positions.extend(self.solver.positions().iter().map(|&p| Vec3::from(p)));
+        fitroom_body::rig::compute_normals_into(positions, &self.triangles, normals);
+        for ((p, &n), &w) in positions
+            .iter_mut()
+            .zip(normals.iter())
+            .zip(&self.render_weight)
+        {
             if n.is_finite() {
                 *p += n * (w * RENDER_OFFSET_M);
             }
         }
-        (positions, normals)
     }
 
     /// The garment's current positions.
