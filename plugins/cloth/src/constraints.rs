@@ -1193,7 +1193,8 @@ mod tests {
 
     fn build(mesh: &ClothMesh, w: &[f32]) -> (ConstraintSet, ParticleOrder) {
         let topo = MeshTopology::new(mesh);
-        let order = ParticleOrder::new(mesh.positions());
+        let free: Vec<bool> = w.iter().map(|&w| w > 0.0).collect();
+        let order = ParticleOrder::new(mesh.positions(), &free);
         let set = ConstraintSet::build(mesh.positions(), &topo, &Fabric::cotton(), w, &order);
         (set, order)
     }
