@@ -2721,21 +2721,24 @@ mod tests {
         }
     }
 
+    /// A 40 × 30 cylinder from `base` (radius, height), pinned at its top ring, on 2 threads.
+    fn skirt_on_two_threads(base: Vec3, radius: f32, height: f32) -> ClothSolver {
+        let mesh = ClothMesh::cylinder(base, radius, height, 40, 30).expect("a valid skirt");
+        let top: Vec<u32> = ClothMesh::cylinder_ring(40, 30).collect();
+        let settings = SolverSettings {
+            threads: 2,
+            ..SolverSettings::default()
+        };
+        ClothSolver::new(&mesh, Fabric::cotton(), &top, settings).expect("a valid cloth")
+    }
+
     #[test]
     fn the_baseline_and_avx_kernels_give_the_same_bits() {
         if Isa::detect() != Isa::Avx {
             return;
         }
         let run = |isa: Isa| {
-            let mesh = ClothMesh::cylinder(Vec3::new(0.0, 0.4, 0.0), 0.25, 0.6, 40, 30)
-                .expect("a valid skirt");
-            let top: Vec<u32> = ClothMesh::cylinder_ring(40, 30).collect();
-            let settings = SolverSettings {
-                threads: 2,
-                ..SolverSettings::default()
-            };
-            let mut cloth =
-                ClothSolver::new(&mesh, Fabric::cotton(), &top, settings).expect("a valid cloth");
+            let mut cloth = skirt_on_two_threads(Vec3::new(0.0, 0.4, 0.0), 0.25, 0.6);
             cloth.isa = isa;
             cloth.set_wind(Some(Wind::new(Vec3::new(1.0, 0.0, 0.5), 1.0, 0.3, 3)));
             let legs = |t: f32| {
@@ -2767,15 +2770,7 @@ mod tests {
         // give the one-particle pass's positions bit for bit, through the later passes, the
         // floor, the crease between overlapping shapes and the tether repairs.
         let run = |group: bool, colliders: bool| {
-            let mesh = ClothMesh::cylinder(Vec3::new(0.0, 0.0, 0.0), 0.22, 0.95, 40, 30)
-                .expect("a valid skirt");
-            let top: Vec<u32> = ClothMesh::cylinder_ring(40, 30).collect();
-            let settings = SolverSettings {
-                threads: 2,
-                ..SolverSettings::default()
-            };
-            let mut cloth =
-                ClothSolver::new(&mesh, Fabric::cotton(), &top, settings).expect("a valid cloth");
+            let mut cloth = skirt_on_two_threads(Vec3::ZERO, 0.22, 0.95);
             cloth.group_collisions = group;
             cloth
                 .set_planes(&[Plane::floor(0.0)])
