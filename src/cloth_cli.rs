@@ -4,7 +4,8 @@
 //!   interpolated to the 120 Hz cloth steps): per-step cost, penetration, strain, resets.
 //! * `fit`: the garment draped on the body standing in its rest pose: the fit map's figures
 //!   (strain, gap) and the ease at the bust, waist and hip.
-//! * `bench`: the cloth step's cost for the dress on the walking avatar, and its growth with
+//! * `bench`: the cloth step's cost for the dress on the walking avatar (as shipped, and meshed
+//!   again to about 4,000 particles, the size of the speed goal's dress), and its growth with
 //!   the particle count.
 
 use std::path::Path;
@@ -34,6 +35,18 @@ pub fn load_garment(
     garment: &Path,
     size: Option<&str>,
 ) -> Result<(ShapedBody, GarmentMesh)> {
+    load_garment_meshed(model, shape, garment, size, None)
+}
+
+/// As [`load_garment`]; a pattern is meshed at `edge_cm` instead of its file's
+/// `target_edge_cm` if given (a mesh garment ignores it).
+fn load_garment_meshed(
+    model: &BodyModel,
+    shape: &Shape,
+    garment: &Path,
+    size: Option<&str>,
+    edge_cm: Option<f32>,
+) -> Result<(ShapedBody, GarmentMesh)> {
     let shaped = model.shaped(shape)?;
     let body = BodySurface::new(model, &shaped)?;
     let ext = garment
@@ -43,7 +56,10 @@ pub fn load_garment(
         .unwrap_or_default();
     let mesh = match ext.as_str() {
         "ron" => {
-            let pattern = Pattern::load(garment)?;
+            let mut pattern = Pattern::load(garment)?;
+            if let Some(edge) = edge_cm {
+                pattern.target_edge_cm = edge;
+            }
             let labels = pattern.size_labels();
             let size = match size {
                 Some(s) => s.to_owned(),
@@ -167,6 +183,18 @@ pub fn sim(
     threads: Option<usize>,
 ) -> Result<(SimReport, GarmentSim, Vec<Affine3A>)> {
     let (shaped, mesh) = load_garment(model, shape, garment, size)?;
+    sim_mesh(model, &shaped, &mesh, motion, frames, threads)
+}
+
+/// [`sim`] of a garment already meshed on the body `shaped`.
+fn sim_mesh(
+    model: &BodyModel,
+    shaped: &ShapedBody,
+    mesh: &GarmentMesh,
+    motion: &Path,
+    frames: usize,
+    threads: Option<usize>,
+) -> Result<(SimReport, GarmentSim, Vec<Affine3A>)> {
     let source = BvhSource::load(motion, Default::default())
         .with_context(|| format!("cannot load the motion '{}'", motion.display()))?;
     let floor_y = -source.options().sensor_height_m;
@@ -185,7 +213,7 @@ pub fn sim(
         model,
         &shaped.positions,
         &shaped.rest_pose,
-        &sim_garment(&mesh),
+        &sim_garment(mesh),
         settings,
     )?;
     sim.set_floor(Some(floor_y))?;
@@ -366,6 +394,12 @@ pub fn fit_map(
 pub struct BenchReport {
     /// The dress on the walking avatar.
     pub dress: SimReport,
+    /// The same dress meshed finer, to about [`DRESS_PARTICLES`] particles (the size of the
+    /// goal's dress, seed 000's 4,088-vertex dress), on the same walk; `None` for a mesh
+    /// garment (it cannot be meshed again).
+    pub dress_4k: Option<SimReport>,
+    /// The edge length `dress_4k` was meshed at, cm.
+    pub dress_4k_edge_cm: Option<f32>,
     /// Per particle count (cylinders around the body's colliders, 10 substeps, 120 Hz): one
     /// step's cost, ms.
     pub scaling: Vec<(usize, Stats)>,
@@ -373,10 +407,28 @@ pub struct BenchReport {
     pub goal_ms: f64,
 }
 
+/// The particle count of the speed goal's dress.
+pub const DRESS_PARTICLES: usize = 4_000;
+
 /// `fitroom cloth bench`.
 pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> Result<BenchReport> {
-    let (dress, _, _) = sim(model, &Shape::default(), dress, None, motion, frames, None)?;
-    let shaped = model.shaped(&Shape::default())?;
+    let shape = Shape::default();
+    let (shaped, mesh) = load_garment(model, &shape, dress, None)?;
+    let (report, _, _) = sim_mesh(model, &shaped, &mesh, motion, frames, None)?;
+    let pattern = dress
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
+    let (dress_4k, edge_cm) = if pattern {
+        // The particle count grows as the inverse square of the edge length.
+        let edge_cm = Pattern::load(dress)?.target_edge_cm
+            * (report.particles as f32 / DRESS_PARTICLES as f32).sqrt();
+        let (_, fine) = load_garment_meshed(model, &shape, dress, None, Some(edge_cm))?;
+        let (fine, _, _) = sim_mesh(model, &shaped, &fine, motion, frames, None)?;
+        (Some(fine), Some(edge_cm))
+    } else {
+        (None, None)
+    };
+    let dress = report;
     let mut scaling = Vec::new();
     for (around, rows) in [(32u32, 32u32), (64, 64), (128, 128), (256, 256)] {
         // A tube around the hips and legs: a skirt-like cloth of around × rows particles.
@@ -411,6 +463,8 @@ pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> R
     }
     Ok(BenchReport {
         dress,
+        dress_4k,
+        dress_4k_edge_cm: edge_cm,
         scaling,
         threads: SolverSettings::default().threads,
         goal_ms: 0.6,

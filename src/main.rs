@@ -158,7 +158,8 @@ enum ClothCommand {
         #[arg(long)]
         json: bool,
     },
-    /// The cloth step's cost: the dress on the walking avatar, and 1k-64k particles.
+    /// The cloth step's cost: the dress on the walking avatar (as shipped and meshed to about
+    /// 4,000 particles), and 1k-64k particles.
     Bench {
         #[arg(long)]
         garment: Option<PathBuf>,
@@ -913,6 +914,12 @@ fn cloth_command(command: ClothCommand) -> Result<()> {
                     r.dress.step_ms.p95,
                     r.goal_ms
                 );
+                if let (Some(fine), Some(edge)) = (&r.dress_4k, r.dress_4k_edge_cm) {
+                    println!(
+                        "  meshed finer ({edge:.2} cm edges, {} particles): {:.2} ms per step (p95 {:.2})",
+                        fine.particles, fine.step_ms.mean, fine.step_ms.p95,
+                    );
+                }
                 for (n, s) in &r.scaling {
                     println!(
                         "  {n:>6} particles: {:.2} ms per step (p95 {:.2})",
