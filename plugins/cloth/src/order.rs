@@ -321,4 +321,53 @@ mod tests {
             assert!(hi - lo < 0.011 * (n - 1) as f32, "block {b}: {lo}..{hi}");
         }
     }
+
+    /// A `64 × 64` sheet (rows along y, the longer side) whose particles `free` says are free.
+    fn sheet(free: impl Fn(usize, usize) -> bool) -> (Vec<Vec3>, Vec<bool>) {
+        let n = 64;
+        let rest = (0..n * n)
+            .map(|k| Vec3::new((k % n) as f32 * 0.01, (k / n) as f32 * 0.011, 0.0))
+            .collect();
+        let free = (0..n * n).map(|k| free(k % n, k / n)).collect();
+        (rest, free)
+    }
+
+    fn block_sizes(order: &ParticleOrder) -> Vec<u32> {
+        order.block_start.windows(2).map(|w| w[1] - w[0]).collect()
+    }
+
+    #[test]
+    fn a_small_free_imbalance_keeps_the_median_split() {
+        // The top four rows attached: the first split (across y, at row 32) leaves 2,048 free
+        // particles below and 1,792 above, 128 more than half of the 3,840 below: within
+        // 1/8 (480), so the median stays and the blocks keep equal counts. At 1/8 or more
+        // (the top 40 rows, `blocks_hold_equally_many_free_particles`) the split moves.
+        let (rest, free) = sheet(|_, row| row < 60);
+        let order = ParticleOrder::new(&rest, &free);
+        assert_eq!(order.blocks(), 4);
+        assert_eq!(block_sizes(&order), [1024; 4]);
+        let (rest, free) = sheet(|_, row| row < 24);
+        let order = ParticleOrder::new(&rest, &free);
+        assert!(block_sizes(&order).iter().any(|&s| s != 1024));
+    }
+
+    #[test]
+    fn few_or_no_free_particles_leave_no_block_nearly_empty() {
+        for free_corner in [0usize, 1, 5, 40] {
+            // `free_corner` free particles in one corner of the sheet, the rest attached.
+            let (rest, free) = sheet(|col, row| row * 64 + col < free_corner);
+            let order = ParticleOrder::new(&rest, &free);
+            let sizes = block_sizes(&order);
+            // Each split keeps at least an eighth of its node on each side.
+            let least = (64 * 64) >> (3 * order.depth);
+            assert!(
+                sizes.iter().all(|&s| s as usize >= least),
+                "{free_corner} free: {sizes:?}"
+            );
+            let mut seen = vec![false; 64 * 64];
+            for &m in &order.to_mesh {
+                assert!(!std::mem::replace(&mut seen[m as usize], true));
+            }
+        }
+    }
 }

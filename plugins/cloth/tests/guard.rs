@@ -67,3 +67,43 @@ fn bad_inputs_are_refused_with_errors() {
     );
     assert!(fitroom_cloth::ClothSolver::new(&mesh, Fabric::cotton(), &[99], settings(1)).is_err());
 }
+
+#[test]
+fn a_stretch_below_the_guards_ratio_is_not_a_blow_up() {
+    // The two top corners of a hanging cloth pulled apart slowly (0.6 m/s, so that nothing is
+    // fast): its edges stretch through 4 (the guard's old threshold, which a pinched T-shirt
+    // reaches and recovers from) to past 6 (the default).
+    let (mesh, pins) = hanging_cloth(1.0, 4, 1.5);
+    let mut cloth = solver(&mesh, Fabric::cotton(), &pins, settings(1));
+    let guard = cloth.settings().guard;
+    assert_eq!(guard.max_stretch_ratio, 6.0);
+    let corners = [mesh.positions()[0], mesh.positions()[4]];
+    let (mut between, mut past) = (0, 0);
+    for k in 1..=1200 {
+        let pull = 0.6 * k as f32 * DT;
+        let targets = [
+            corners[0] - glam::Vec3::X * pull,
+            corners[1] + glam::Vec3::X * pull,
+        ];
+        cloth.set_attachment_targets(&targets).unwrap();
+        let report = cloth.step(DT).unwrap();
+        let ratio = report.max_stretch_ratio;
+        if k % 60 == 0 {
+            println!("{k}: ratio {ratio:.2}, {:?}", report.health);
+        }
+        assert!(report.max_speed_m_s < guard.max_speed_m_s, "{report:?}");
+        if ratio <= guard.max_stretch_ratio {
+            assert!(report.is_healthy(), "ratio {ratio}: {report:?}");
+            between += usize::from(ratio > 4.0);
+        } else {
+            assert!(
+                matches!(report.health, Health::BlownUp(BlowUp::Stretch { .. })),
+                "ratio {ratio}: {report:?}"
+            );
+            past += 1;
+            break;
+        }
+    }
+    assert!(between > 10, "{between} steps between 4 and 6");
+    assert_eq!(past, 1, "the pull reaches past the guard's ratio");
+}
