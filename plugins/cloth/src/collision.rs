@@ -61,6 +61,16 @@ use glam::{Mat3A, Quat, Vec3, Vec3A};
 
 use crate::simd::{Lanes, V3};
 
+/// How deep (metres) a particle may be inside a collider's skin without being moved: a
+/// particle that a collider has just put on its skin is found there again by the next
+/// collision pass, in or out by a rounding error, and without a tolerance the pass "moved" it
+/// again (by nanometres, with friction applied again). On the sun dress on a walk
+/// (`fitroom cloth sim`, 07_04), a third of the particles a collider moved were "moved" again
+/// in both later passes and so went on to the solver for particles caught between two
+/// colliders, which found nothing to do; with a micrometre's tolerance (a three-thousandth of
+/// the 3 mm skin) none did, and the step took 9 % less time.
+pub(crate) const CONTACT_TOLERANCE: f32 = 1e-6;
+
 /// Headroom (metres) of the eight-particle screen ([`SweptCollider::candidates`]): it keeps a
 /// lane whose path clears a collider by less than this, although it computes the clearance
 /// with the one-particle test's operations in the same order (the same bits with glam's SSE2
@@ -391,7 +401,7 @@ impl SweptCollider {
                 return (now, false);
             }
             let depth = -(l1 - l0).dot(n0) - s0;
-            if depth <= 0.0 {
+            if depth <= CONTACT_TOLERANCE {
                 return (now, false);
             }
             let projected = l1 + depth * n0;
@@ -400,7 +410,7 @@ impl SweptCollider {
             (projected, tangential, depth)
         } else {
             // Started inside: push to the nearest surface.
-            if s1 >= 0.0 {
+            if s1 >= -CONTACT_TOLERANCE {
                 return (now, false);
             }
             let projected = l1 - s1 * n1;
