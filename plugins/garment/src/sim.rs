@@ -576,6 +576,8 @@ impl GarmentSim {
     pub fn step(&mut self, skinning: &[Affine3A], dt: f32) -> Result<SimStep, SimError> {
         self.check(skinning)?;
         let start = std::time::Instant::now();
+        // The solver's workers wake while the targets and colliders are posed.
+        self.solver.prewake();
         let mut targets = std::mem::take(&mut self.spare_targets);
         self.anchors_into(skinning, &mut targets);
         let jumped = self.last_targets.as_ref().is_some_and(|last| {
