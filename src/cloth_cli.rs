@@ -394,7 +394,7 @@ pub fn fit_map(
 pub struct BenchReport {
     /// The dress on the walking avatar.
     pub dress: SimReport,
-    /// The same dress meshed finer, to about [`DRESS_PARTICLES`] particles (the size of the
+    /// The same dress meshed again, to about [`DRESS_PARTICLES`] particles (the size of the
     /// goal's dress, seed 000's 4,088-vertex dress), on the same walk; `None` for a mesh
     /// garment (it cannot be meshed again).
     pub dress_4k: Option<SimReport>,
@@ -419,10 +419,18 @@ pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> R
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
     let (dress_4k, edge_cm) = if pattern {
-        // The particle count grows as the inverse square of the edge length.
-        let edge_cm = Pattern::load(dress)?.target_edge_cm
-            * (report.particles as f32 / DRESS_PARTICLES as f32).sqrt();
-        let (_, fine) = load_garment_meshed(model, &shape, dress, None, Some(edge_cm))?;
+        // The particle count grows as the inverse square of the edge length (kept within
+        // what a pattern file may ask for).
+        let edge_cm = (Pattern::load(dress)?.target_edge_cm
+            * (report.particles as f32 / DRESS_PARTICLES as f32).sqrt())
+        .clamp(0.5, 20.0);
+        let (_, fine) = load_garment_meshed(model, &shape, dress, None, Some(edge_cm))
+            .with_context(|| {
+                format!(
+                    "cannot mesh '{}' again at {edge_cm:.2} cm edges for the {DRESS_PARTICLES}-particle bench",
+                    dress.display()
+                )
+            })?;
         let (fine, _, _) = sim_mesh(model, &shaped, &fine, motion, frames, None)?;
         (Some(fine), Some(edge_cm))
     } else {

@@ -916,7 +916,7 @@ fn cloth_command(command: ClothCommand) -> Result<()> {
                 );
                 if let (Some(fine), Some(edge)) = (&r.dress_4k, r.dress_4k_edge_cm) {
                     println!(
-                        "  meshed finer ({edge:.2} cm edges, {} particles): {:.2} ms per step (p95 {:.2})",
+                        "  re-meshed ({edge:.2} cm edges, {} particles): {:.2} ms per step (p95 {:.2})",
                         fine.particles, fine.step_ms.mean, fine.step_ms.p95,
                     );
                 }

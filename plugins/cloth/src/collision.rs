@@ -26,12 +26,13 @@
 //! normal there; the tangent plane at `c₀` separates `l₀`'s side from the whole convex,
 //! skin-inflated shape. When `l₁` is inside the shape, or when
 //! the segment `l₀→l₁` is long enough to have crossed it (`|l₁-l₀| > d(l₀) + d(l₁)`, a test
-//! that is exact by the 1-Lipschitz property of distance), `l₁` is projected onto that plane
-//! and friction is applied along it. The result lies in the half-space of `l₀`, which holds
-//! no point of the shape.
+//! that is exact by the 1-Lipschitz property of distance), and `l₁` lies beyond that plane by
+//! more than [`CONTACT_TOLERANCE`] (1 µm), `l₁` is projected onto the plane and friction is
+//! applied along it. The result lies in the half-space of `l₀`, which holds no point of the
+//! shape.
 //!
 //! **Guarantee.** A particle that is outside a collider at the start of a substep is outside
-//! it (by the skin distance, up to rounding) after that collider's projection, whatever the
+//! it (by the skin distance, up to [`CONTACT_TOLERANCE`]) after that collider's projection, whatever the
 //! collider's speed — a collider teleported 2 m in one step cannot tunnel through the cloth,
 //! because the relative path is never allowed to cross to the far side. A particle that
 //! starts a substep inside (an initial overlap, a collider growing, or a conflict left from the
@@ -61,7 +62,7 @@ use glam::{Mat3A, Quat, Vec3, Vec3A};
 
 use crate::simd::{Lanes, V3};
 
-/// How deep (metres) a particle may be inside a collider's skin without being moved: a
+/// How deep (metres) a particle may be inside a collider's (or plane's) skin without being moved: a
 /// particle that a collider has just put on its skin is found there again by the next
 /// collision pass, in or out by a rounding error, and without a tolerance the pass "moved" it
 /// again (by nanometres, with friction applied again). On the sun dress on a walk
@@ -451,7 +452,7 @@ pub(crate) fn collide_plane(
 ) -> Vec3A {
     let n = Vec3A::from(plane.normal);
     let s = n.dot(now) - plane.offset - thickness;
-    if s >= 0.0 {
+    if s >= -CONTACT_TOLERANCE {
         return now;
     }
     let projected = now - s * n;
@@ -542,6 +543,18 @@ mod tests {
                 let (r, hit_again) = c.collide(start, q, thickness, friction);
                 again += usize::from(hit_again);
                 assert!(!hit_again && r == q, "{start} -> {now} -> {q} -> {r}");
+            }
+            // Whether moved or not, no result is deeper in the skin than the tolerance (plus
+            // rounding): a tolerance too large would show here.
+            for _ in 0..20 {
+                let start = end_a.lerp(end_b, rnd() + 0.5) + Vec3A::new(rnd(), rnd(), rnd()) * 0.4;
+                let now = start + Vec3A::new(rnd(), rnd(), rnd()) * 0.1;
+                let (q, _) = c.collide(start, now, thickness, 0.5);
+                let (s, _) = c.skin_distance(q, thickness);
+                assert!(
+                    s >= -CONTACT_TOLERANCE - 1e-6,
+                    "{start} -> {now} -> {q}: {s}"
+                );
             }
         }
         assert!(hits > 300, "{hits} hits");

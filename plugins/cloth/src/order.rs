@@ -338,15 +338,15 @@ mod tests {
 
     #[test]
     fn a_small_free_imbalance_keeps_the_median_split() {
-        // The top four rows attached: the first split (across y, at row 32) leaves 2,048 free
-        // particles below and 1,792 above, 128 more than half of the 3,840 below: within
-        // 1/8 (480), so the median stays and the blocks keep equal counts. At 1/8 or more
-        // (the top 40 rows, `blocks_hold_equally_many_free_particles`) the split moves.
-        let (rest, free) = sheet(|_, row| row < 60);
+        // The top seven rows attached: the first split (across y, at row 32) leaves 2,048
+        // free particles below and 1,600 above; the difference, 448, is within 1/8 of the
+        // 3,648 free particles (456), so the median stays and the blocks keep equal counts.
+        // With eight rows attached, 512 against 448: the split moves.
+        let (rest, free) = sheet(|_, row| row < 57);
         let order = ParticleOrder::new(&rest, &free);
         assert_eq!(order.blocks(), 4);
         assert_eq!(block_sizes(&order), [1024; 4]);
-        let (rest, free) = sheet(|_, row| row < 24);
+        let (rest, free) = sheet(|_, row| row < 56);
         let order = ParticleOrder::new(&rest, &free);
         assert!(block_sizes(&order).iter().any(|&s| s != 1024));
     }
