@@ -2742,6 +2742,15 @@ mod tests {
         ClothSolver::new(&mesh, Fabric::cotton(), &top, settings).expect("a valid cloth")
     }
 
+    /// The cloth's positions as bits, for comparisons that must be exact.
+    fn position_bits(cloth: &ClothSolver) -> Vec<[u32; 3]> {
+        cloth
+            .positions()
+            .iter()
+            .map(|p| p.to_array().map(f32::to_bits))
+            .collect()
+    }
+
     #[test]
     fn the_baseline_and_avx_kernels_give_the_same_bits() {
         if Isa::detect() != Isa::Avx {
@@ -2764,11 +2773,7 @@ mod tests {
                     .expect("valid colliders");
                 cloth.step(1.0 / 120.0).expect("a valid step");
             }
-            cloth
-                .positions()
-                .iter()
-                .map(|p| p.to_array().map(f32::to_bits))
-                .collect::<Vec<_>>()
+            position_bits(&cloth)
         };
         assert_eq!(run(Isa::Baseline), run(Isa::Avx));
     }
@@ -2803,11 +2808,7 @@ mod tests {
                 }
                 cloth.step(1.0 / 120.0).expect("a valid step");
             }
-            cloth
-                .positions()
-                .iter()
-                .map(|p| p.to_array().map(f32::to_bits))
-                .collect::<Vec<_>>()
+            position_bits(&cloth)
         };
         let grouped = run(true, true);
         assert_eq!(grouped, run(false, true));
