@@ -35,20 +35,20 @@ pub fn load_garment(
     garment: &Path,
     size: Option<&str>,
 ) -> Result<(ShapedBody, GarmentMesh)> {
-    load_garment_meshed(model, shape, garment, size, None)
+    let shaped = model.shaped(shape)?;
+    let body = BodySurface::new(model, &shaped)?;
+    let mesh = mesh_garment(&body, garment, size, None)?;
+    Ok((shaped, mesh))
 }
 
-/// As [`load_garment`]; a pattern is meshed at `edge_cm` instead of its file's
-/// `target_edge_cm` if given (a mesh garment ignores it).
-fn load_garment_meshed(
-    model: &BodyModel,
-    shape: &Shape,
+/// The garment of [`load_garment`] on `body`; a pattern is meshed at `edge_cm` instead of its
+/// file's `target_edge_cm` if given (a mesh garment ignores it).
+fn mesh_garment(
+    body: &BodySurface,
     garment: &Path,
     size: Option<&str>,
     edge_cm: Option<f32>,
-) -> Result<(ShapedBody, GarmentMesh)> {
-    let shaped = model.shaped(shape)?;
-    let body = BodySurface::new(model, &shaped)?;
+) -> Result<GarmentMesh> {
     let ext = garment
         .extension()
         .and_then(|e| e.to_str())
@@ -76,16 +76,16 @@ fn load_garment_meshed(
                 );
             }
             pattern
-                .build(&body, &size, &BuildOptions::default())?
-                .welded(&body)?
+                .build(body, &size, &BuildOptions::default())?
+                .welded(body)?
         }
         "obj" | "glb" | "gltf" => {
             let fabric_path = crate::assets::assets_dir()?.join("fabrics/cotton.ron");
             let spec = load_fabric(&fabric_path)?;
             if ext == "obj" {
-                fitroom_garment::load_obj(garment, &body, "cotton", spec)?
+                fitroom_garment::load_obj(garment, body, "cotton", spec)?
             } else {
-                fitroom_garment::load_gltf(garment, &body, "cotton", spec)?
+                fitroom_garment::load_gltf(garment, body, "cotton", spec)?
             }
         }
         _ => bail!(
@@ -93,7 +93,7 @@ fn load_garment_meshed(
             garment.display()
         ),
     };
-    Ok((shaped, mesh))
+    Ok(mesh)
 }
 
 fn sim_garment(mesh: &GarmentMesh) -> SimGarment {
@@ -412,8 +412,9 @@ pub const DRESS_PARTICLES: usize = 4_000;
 
 /// `fitroom cloth bench`.
 pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> Result<BenchReport> {
-    let shape = Shape::default();
-    let (shaped, mesh) = load_garment(model, &shape, dress, None)?;
+    let shaped = model.shaped(&Shape::default())?;
+    let body = BodySurface::new(model, &shaped)?;
+    let mesh = mesh_garment(&body, dress, None, None)?;
     let (report, _, _) = sim_mesh(model, &shaped, &mesh, motion, frames, None)?;
     let pattern = dress
         .extension()
@@ -424,7 +425,7 @@ pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> R
         let edge_cm = (Pattern::load(dress)?.target_edge_cm
             * (report.particles as f32 / DRESS_PARTICLES as f32).sqrt())
         .clamp(0.5, 20.0);
-        let (_, fine) = load_garment_meshed(model, &shape, dress, None, Some(edge_cm))
+        let fine = mesh_garment(&body, dress, None, Some(edge_cm))
             .with_context(|| {
                 format!(
                     "cannot mesh '{}' again at {edge_cm:.2} cm edges for the {DRESS_PARTICLES}-particle bench",
