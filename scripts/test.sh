@@ -10,3 +10,6 @@ if [ -z "${XDG_RUNTIME_DIR:-}" ]; then
     export XDG_RUNTIME_DIR
 fi
 cargo test --workspace --all-targets --locked "$@"
+# The cloth core's own tests again, with the debug assertions and overflow checks that the dev
+# profile leaves out of its hot loops (see Cargo.toml).
+cargo test -p fitroom_cloth --lib --tests --profile checked --locked "$@"
