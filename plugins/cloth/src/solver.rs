@@ -1767,14 +1767,14 @@ impl StepContext<'_> {
             if group && eight {
                 // SAFETY: particles `i..i + 8` belong to this item.
                 match unsafe { self.collide_group(i, &scene) } {
-                    Some((start, p, moved)) => {
+                    Some((start, p, moved, last)) => {
                         // A particle no collider moved is done unless a plane is near (its
                         // position is unchanged, and its first pass found nothing to repeat).
                         let mut rest = if scene.any_plane { ALL_LANES } else { moved };
                         while rest != 0 {
                             let l = rest.trailing_zeros() as usize;
                             rest &= rest - 1;
-                            let first = Some(moved & (1 << l) != 0);
+                            let first = Some((moved & (1 << l) != 0).then_some(last[l]));
                             // SAFETY: as above.
                             unsafe {
                                 self.collide_particle(i + l, sub, start[l], p[l], first, &scene)
@@ -1807,8 +1807,9 @@ impl StepContext<'_> {
     }
 
     /// The first collision pass over the colliders (not the planes) for the eight particles
-    /// from `i`: their start positions, their positions after the pass, and the lanes it moved.
-    /// `None` if a position is not finite (the one-particle path handles it).
+    /// from `i`: their start positions, their positions after the pass, the lanes it moved and
+    /// per lane the place in the scene's order of the last collider that moved it. `None` if
+    /// a position is not finite (the one-particle path handles it).
     ///
     /// # Safety
     /// Particles `i..i + 8` belong to the calling item.
@@ -1816,10 +1817,11 @@ impl StepContext<'_> {
         &self,
         i: usize,
         scene: &Scene<'_>,
-    ) -> Option<([Vec3A; LANES], [Vec3A; LANES], u32)> {
+    ) -> Option<([Vec3A; LANES], [Vec3A; LANES], u32, [u16; LANES])> {
         let k = &self.k;
         let mut start = [Vec3A::ZERO; LANES];
         let mut p = [Vec3A::ZERO; LANES];
+        let mut last = [0u16; LANES];
         // SAFETY: the caller's contract.
         let moved = unsafe {
             collide8(
@@ -1828,15 +1830,22 @@ impl StepContext<'_> {
                 self.xs.as_ptr().add(i),
                 scene,
                 (k.thickness, k.friction),
-                (&mut start, &mut p),
+                (&mut start, &mut p, &mut last),
             )
         }?;
-        Some((start, p, moved))
+        Some((start, p, moved, last))
     }
 
     /// Collides particle `i`, moving from `start` to `p` in substep `sub`, with the scene's
     /// colliders and planes and stores the result. `first`: the first pass over the colliders
-    /// was already made (`p` is its result) and whether it moved the particle.
+    /// was already made (`p` is its result), and the place in the scene's order of the last
+    /// collider that moved the particle (`None`: none did).
+    ///
+    /// A pass tests the colliders, then the planes, in the scene's order, and is repeated
+    /// while it moves the particle. The pass after the first tests only the shapes before the
+    /// last one that moved it: those after it tested the particle where it still is and left
+    /// it there, and a shape leaves a particle it moved on its skin, where it does not move it
+    /// again (`CONTACT_TOLERANCE`). A third pass tests every shape.
     ///
     /// # Safety
     /// Particle `i` belongs to the calling item.
@@ -1846,51 +1855,71 @@ impl StepContext<'_> {
         sub: u32,
         start: Vec3A,
         mut p: Vec3A,
-        first: Option<bool>,
+        first: Option<Option<u16>>,
         scene: &Scene<'_>,
     ) {
         let k = &self.k;
         let colliders = scene.colliders;
+        let collider_count = scene.near.map_or(colliders.len(), <[u16]>::len);
         let mut touched = false;
         let mut settled = true;
+        // Shapes (colliders, then planes) this pass tests: those before `limit`.
+        let mut limit = usize::MAX;
         for pass in 0..3 {
-            let mut moved = false;
+            // The place of the last shape that moved the particle in this pass.
+            let mut last: Option<usize> = None;
             match first {
-                Some(first_moved) if pass == 0 => moved = first_moved,
+                Some(first_last) if pass == 0 => last = first_last.map(usize::from),
                 _ => {
                     let (seg_low, seg_high) = (start.min(p), start.max(p));
-                    let mut test = |collider: &SweptCollider| {
+                    let mut test = |place: usize, collider: &SweptCollider| {
                         if collider.overlaps(seg_low, seg_high) {
                             let (q, hit) = collider.collide(start, p, k.thickness, k.friction);
                             if hit {
                                 p = q;
-                                moved = true;
+                                last = Some(place);
                             }
                         }
                     };
+                    let n = collider_count.min(limit);
                     match scene.near {
-                        None => colliders.iter().for_each(&mut test),
-                        Some(near) => near.iter().for_each(|&c| test(&colliders[c as usize])),
+                        None => colliders[..n]
+                            .iter()
+                            .enumerate()
+                            .for_each(|(c, s)| test(c, s)),
+                        Some(near) => near[..n]
+                            .iter()
+                            .enumerate()
+                            .for_each(|(c, &s)| test(c, &colliders[s as usize])),
                     }
                 }
             }
-            let mut test_plane = |plane: &Plane| {
+            let mut test_plane = |place: usize, plane: &Plane| {
                 let q = collide_plane(plane, start, p, k.thickness, k.friction);
                 if q != p {
                     p = q;
-                    moved = true;
+                    last = Some(collider_count + place);
                 }
             };
+            let n = limit.saturating_sub(collider_count);
             match scene.planes {
-                None => self.planes.iter().for_each(&mut test_plane),
-                Some(near) => near
+                None => self.planes[..n.min(self.planes.len())]
                     .iter()
-                    .for_each(|&c| test_plane(&self.planes[c as usize])),
+                    .enumerate()
+                    .for_each(|(c, plane)| test_plane(c, plane)),
+                Some(near) => near[..n.min(near.len())]
+                    .iter()
+                    .enumerate()
+                    .for_each(|(c, &plane)| test_plane(c, &self.planes[plane as usize])),
             }
-            touched |= moved;
-            if !moved || scene.shapes < 2 {
+            let Some(last) = last else {
+                break;
+            };
+            touched = true;
+            if scene.shapes < 2 {
                 break;
             }
+            limit = if pass == 0 { last } else { usize::MAX };
             settled = pass < 2;
         }
         if !settled {
@@ -2040,7 +2069,8 @@ struct Scene<'a> {
 /// both eight consecutive particles) over the scene's colliders, in order, as the
 /// one-particle pass makes it: each collider screens the eight
 /// ([`SweptCollider::candidates`]) and collides the lanes it may move. Returns the lanes
-/// moved and writes the start and resulting positions to `out`; `None` (and nothing useful
+/// moved and writes the start and resulting positions and, for each moved lane, the place in
+/// the scene's order of the last collider that moved it to `out`; `None` (and nothing useful
 /// in `out`) if a position is not finite.
 ///
 /// # Safety
@@ -2052,7 +2082,7 @@ unsafe fn collide8(
     now: *const Vec3A,
     scene: &Scene<'_>,
     contact: (f32, f32),
-    out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES]),
+    out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES], &mut [u16; LANES]),
 ) -> Option<u32> {
     dispatch_lanes!(
         isa,
@@ -2061,7 +2091,7 @@ unsafe fn collide8(
             now: *const Vec3A,
             scene: &Scene<'_>,
             contact: (f32, f32),
-            out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES]),
+            out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES], &mut [u16; LANES]),
         ) -> Option<u32>
     )
 }
@@ -2072,7 +2102,7 @@ unsafe fn collide8_with<L: Lanes>(
     now: *const Vec3A,
     scene: &Scene<'_>,
     (thickness, friction): (f32, f32),
-    (start_out, p): (&mut [Vec3A; LANES], &mut [Vec3A; LANES]),
+    (start_out, p, last): (&mut [Vec3A; LANES], &mut [Vec3A; LANES], &mut [u16; LANES]),
 ) -> Option<u32> {
     let index: [u32; LANES] = std::array::from_fn(|l| offset(l as u32));
     // SAFETY: the caller's contract.
@@ -2119,6 +2149,7 @@ unsafe fn collide8_with<L: Lanes>(
             if hit {
                 p[l] = q;
                 moved |= 1 << l;
+                last[l] = c as u16;
                 changed = true;
             }
         }
@@ -2574,20 +2605,23 @@ mod tests {
                 };
                 let mut expected = now;
                 let mut expected_moved = 0u32;
+                let mut expected_last = [0u16; LANES];
                 for l in 0..LANES {
                     let (low, high) = (start[l].min(now[l]), start[l].max(now[l]));
-                    for &c in &order {
+                    for (place, &c) in order.iter().enumerate() {
                         if swept[c].overlaps(low, high) {
                             let (q, hit) = swept[c].collide(start[l], expected[l], 0.003, 0.4);
                             if hit {
                                 expected[l] = q;
                                 expected_moved |= 1 << l;
+                                expected_last[l] = place as u16;
                             }
                         }
                     }
                 }
                 for isa in [Isa::Baseline, Isa::detect()] {
                     let (mut s, mut p) = ([Vec3A::ZERO; LANES], [Vec3A::ZERO; LANES]);
+                    let mut last = [0u16; LANES];
                     // SAFETY: eight positions each.
                     let moved = unsafe {
                         collide8(
@@ -2596,10 +2630,13 @@ mod tests {
                             now.as_ptr(),
                             &scene,
                             (0.003, 0.4),
-                            (&mut s, &mut p),
+                            (&mut s, &mut p, &mut last),
                         )
                     };
                     assert_eq!(moved, Some(expected_moved), "round {round} {isa:?}");
+                    for l in (0..LANES).filter(|&l| expected_moved & (1 << l) != 0) {
+                        assert_eq!(last[l], expected_last[l], "round {round} lane {l}");
+                    }
                     hit_lanes += expected_moved.count_ones();
                     missed_lanes += LANES as u32 - expected_moved.count_ones();
                     assert_eq!(s, start);
@@ -2646,7 +2683,7 @@ mod tests {
                     now.as_ptr(),
                     &scene,
                     (0.003, 0.0),
-                    (&mut s, &mut p),
+                    (&mut s, &mut p, &mut [0; LANES]),
                 )
             };
             assert_eq!(moved, None);
