@@ -1767,7 +1767,12 @@ impl StepContext<'_> {
             if group && eight {
                 // SAFETY: particles `i..i + 8` belong to this item.
                 match unsafe { self.collide_group(i, &scene) } {
-                    Some((start, p, moved, last)) => {
+                    Some(GroupPass {
+                        start,
+                        p,
+                        moved,
+                        last,
+                    }) => {
                         // A particle no collider moved is done unless a plane is near (its
                         // position is unchanged, and its first pass found nothing to repeat).
                         let mut rest = if scene.any_plane { ALL_LANES } else { moved };
@@ -1813,11 +1818,7 @@ impl StepContext<'_> {
     ///
     /// # Safety
     /// Particles `i..i + 8` belong to the calling item.
-    unsafe fn collide_group(
-        &self,
-        i: usize,
-        scene: &Scene<'_>,
-    ) -> Option<([Vec3A; LANES], [Vec3A; LANES], u32, [u16; LANES])> {
+    unsafe fn collide_group(&self, i: usize, scene: &Scene<'_>) -> Option<GroupPass> {
         let k = &self.k;
         let mut start = [Vec3A::ZERO; LANES];
         let mut p = [Vec3A::ZERO; LANES];
@@ -1833,7 +1834,12 @@ impl StepContext<'_> {
                 (&mut start, &mut p, &mut last),
             )
         }?;
-        Some((start, p, moved, last))
+        Some(GroupPass {
+            start,
+            p,
+            moved,
+            last,
+        })
     }
 
     /// Collides particle `i`, moving from `start` to `p` in substep `sub`, with the scene's
@@ -2046,6 +2052,16 @@ impl StepContext<'_> {
         unsafe { self.xs_prev.set(i, start + (p - collided)) };
         p
     }
+}
+
+/// The first collision pass of eight particles (see [`StepContext::collide_group`]).
+struct GroupPass {
+    start: [Vec3A; LANES],
+    p: [Vec3A; LANES],
+    /// The lanes moved, as bits.
+    moved: u32,
+    /// Per moved lane: the place in the scene's order of the last collider that moved it.
+    last: [u16; LANES],
 }
 
 /// Every lane of a group of eight, as bits.
