@@ -178,6 +178,9 @@ const SKIN_SMOOTHING: usize = 12;
 /// Largest share of a collider's radius that [`fit_to_anchors`] takes away.
 const MAX_COLLIDER_SHRINK: f32 = 0.6;
 
+/// Anchors [`fit_to_anchors`] bounds together.
+const ANCHOR_RUN: usize = 8;
+
 /// Shrinks posed colliders `(a, b, radius_a, radius_b)` so that no point of `anchors` is
 /// inside one by more than `-skin` (i.e. each stays at least `skin` outside).
 ///
@@ -201,6 +204,18 @@ pub fn fit_to_anchors(
     anchors: &[Vec3],
     skin: f32,
 ) -> f32 {
+    // The bounds of runs of `ANCHOR_RUN` consecutive anchors: a garment's attached vertices
+    // come in mesh order, where neighbours stay together, so a collider skips most anchors
+    // far from it a run at a time.
+    let runs: Vec<(Vec3, Vec3)> = anchors
+        .chunks(ANCHOR_RUN)
+        .map(|run| {
+            run.iter().fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), &p| (lo.min(p), hi.max(p)),
+            )
+        })
+        .collect();
     let mut largest = 0.0f32;
     for (a, b, ra, rb) in colliders.iter_mut() {
         let reach = ra.max(*rb) + skin;
@@ -209,12 +224,26 @@ pub fn fit_to_anchors(
         let axis = *b - *a;
         let len2 = axis.length_squared();
         let (mut cut_a, mut cut_b) = (0.0f32, 0.0f32);
-        for &p in anchors {
+        // A run with a NaN anchor has NaN bounds, which meet every box: its anchors are
+        // tested (and skipped) one by one.
+        let near = runs
+            .iter()
+            .zip(anchors.chunks(ANCHOR_RUN))
+            .filter(|((run_lo, run_hi), _)| !(run_hi.cmplt(lo).any() || run_lo.cmpgt(hi).any()))
+            .flat_map(|(_, run)| run);
+        // A cheaper test before the exact distance: the round cone is the union of spheres
+        // centred on its axis whose radius changes by `slope` per metre along it, so a point
+        // at distance `d` from the axis point nearest to it (parameter `t`) is at least
+        // `d·√(1 − slope²) − r(t)` from its surface (Pythagoras along the axis, then the
+        // smallest of `√(d² + x²) − slope·x`).
+        let slope2 = if len2 > 1e-12 {
+            (*ra - *rb) * (*ra - *rb) / len2
+        } else {
+            0.0
+        };
+        let keep = (1.0 - slope2).max(0.0);
+        for &p in near {
             if p.cmplt(lo).any() || p.cmpgt(hi).any() {
-                continue;
-            }
-            let depth = skin - round_cone_distance(p, *a, *b, *ra, *rb);
-            if depth.is_nan() || depth <= 0.0 {
                 continue;
             }
             let t = if len2 > 1e-12 {
@@ -222,6 +251,15 @@ pub fn fit_to_anchors(
             } else {
                 0.0
             };
+            // (A millimetre's tenth for rounding.)
+            let within = *ra + (*rb - *ra) * t + skin + 1e-4;
+            if (p - (*a + axis * t)).length_squared() * keep > within * within {
+                continue;
+            }
+            let depth = skin - round_cone_distance(p, *a, *b, *ra, *rb);
+            if depth.is_nan() || depth <= 0.0 {
+                continue;
+            }
             if t < 0.5 {
                 cut_a = cut_a.max(depth / (1.0 - t));
             } else {
@@ -816,5 +854,118 @@ mod tests {
         let mut deep = [capsule];
         fit_to_anchors(&mut deep, &[Vec3::new(0.0, -0.01, 0.0)], skin);
         assert!((deep[0].2 - (1.0 - MAX_COLLIDER_SHRINK) * capsule.2).abs() < 1e-6);
+    }
+
+    /// Every anchor against every collider, as `fit_to_anchors` did before it bounded runs of
+    /// anchors: the cuts only.
+    fn cuts_one_by_one(
+        colliders: &[(Vec3, Vec3, f32, f32)],
+        anchors: &[Vec3],
+        skin: f32,
+    ) -> Vec<(f32, f32)> {
+        colliders
+            .iter()
+            .map(|&(a, b, ra, rb)| {
+                let (mut cut_a, mut cut_b) = (0.0f32, 0.0f32);
+                for &p in anchors {
+                    let depth = skin - round_cone_distance(p, a, b, ra, rb);
+                    if depth.is_nan() || depth <= 0.0 {
+                        continue;
+                    }
+                    let axis = b - a;
+                    let t = ((p - a).dot(axis) / axis.length_squared()).clamp(0.0, 1.0);
+                    if t < 0.5 {
+                        cut_a = cut_a.max(depth / (1.0 - t));
+                    } else {
+                        cut_b = cut_b.max(depth / t);
+                    }
+                }
+                (
+                    cut_a.min(MAX_COLLIDER_SHRINK * ra),
+                    cut_b.min(MAX_COLLIDER_SHRINK * rb),
+                )
+            })
+            .collect()
+    }
+
+    #[test]
+    fn runs_of_anchors_shrink_colliders_as_every_anchor_alone_does() {
+        let mut seed = 7u32;
+        let mut r = |scale: f32| {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            ((seed >> 8) as f32 / (1u32 << 24) as f32 - 0.5) * 2.0 * scale
+        };
+        let skin = 0.003;
+        let axes = [
+            Vec3::X,
+            Vec3::NEG_X,
+            Vec3::Y,
+            Vec3::NEG_Y,
+            Vec3::Z,
+            Vec3::NEG_Z,
+        ];
+        let mut cut_cases = 0;
+        for case in 0..300 {
+            let a = Vec3::new(r(0.3), r(0.6), r(0.3));
+            let b = a + Vec3::new(r(0.1), r(0.3), r(0.1));
+            let (ra, rb) = (0.03 + r(0.02).abs(), 0.03 + r(0.02).abs());
+            // Every fourth collider short and steeply tapered (radii 6 and 2 cm, 8 cm apart).
+            let (b, rb, ra) = if case % 4 == 3 {
+                (a + (b - a).normalize_or(Vec3::Y) * 0.08, 0.02, 0.06)
+            } else {
+                (b, rb, ra)
+            };
+            let colliders = [(a, b, ra, rb), (b, a, rb, ra)];
+            // A few anchors anywhere (so runs start at different places), then neighbours a
+            // fraction of a millimetre apart (as in a mesh) at the collider's extreme along
+            // an axis, where a run only just meets the collider's bounds, or anywhere on its
+            // surface; one NaN now and then.
+            let mut anchors: Vec<Vec3> = (0..case % 8)
+                .map(|_| Vec3::new(r(0.35), r(0.7), r(0.35)))
+                .collect();
+            let u = axes[case % 6];
+            let on_surface = if case % 3 < 2 {
+                let (end, r_end) = if (a - b).dot(u) > 0.0 {
+                    (a, ra)
+                } else {
+                    (b, rb)
+                };
+                end + u * r_end
+            } else {
+                let t = r(0.5) + 0.5;
+                let u = Vec3::new(r(1.0), r(1.0), r(1.0)).normalize_or(Vec3::X);
+                a.lerp(b, t) + u * (ra + (rb - ra) * t)
+            };
+            let mut p = on_surface + Vec3::new(r(0.004), r(0.004), r(0.004));
+            for _ in 0..12 {
+                anchors.push(p);
+                p += Vec3::new(r(0.0005), r(0.0005), r(0.0005));
+            }
+            if case % 10 == 0 {
+                anchors.push(Vec3::NAN);
+            }
+            let expected = cuts_one_by_one(&colliders, &anchors, skin);
+            let mut fitted = colliders;
+            let largest = fit_to_anchors(&mut fitted, &anchors, skin);
+            for ((before, after), (cut_a, cut_b)) in colliders.iter().zip(&fitted).zip(&expected) {
+                assert_eq!(
+                    after.2.to_bits(),
+                    (before.2 - cut_a).to_bits(),
+                    "case {case}"
+                );
+                assert_eq!(
+                    after.3.to_bits(),
+                    (before.3 - cut_b).to_bits(),
+                    "case {case}"
+                );
+            }
+            let most = expected.iter().fold(0.0f32, |m, c| m.max(c.0).max(c.1));
+            assert_eq!(largest, most, "case {case}");
+            cut_cases += usize::from(most > 0.0);
+        }
+        assert!(
+            cut_cases >= 100,
+            "only {cut_cases} of 300 cases cut a collider"
+        );
     }
 }
