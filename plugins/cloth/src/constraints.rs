@@ -39,8 +39,10 @@
 //! corners together: the *separators*). The seams of
 //! different pairs of blocks share no particle, nor do the corners (a corner is a connected
 //! cluster of such constraints), so a substep solves the blocks, then all seams in parallel,
-//! then all corners in parallel: three synchronisations per constraint iteration, whatever
-//! the mesh, instead of one per graph colour. Attached particles count like the others here:
+//! then all corners in parallel: three levels per constraint iteration, whatever the mesh,
+//! instead of one per graph colour. (A seam waits only for its two blocks, and a block's
+//! particles only for their block and the separators that touch them: see `crate::pool`.)
+//! Attached particles count like the others here:
 //! they are not written by constraints, but they are moved by the block that holds them.
 //!
 //! **Batches.** Within a work item, constraints are coloured greedily (each takes the smallest
@@ -589,6 +591,31 @@ impl ConstraintSet {
     /// its own cache line).
     pub fn padding_particles(&self) -> usize {
         PADDING_STRIDE * self.items.len()
+    }
+
+    /// The particles (solver numbering, padding included, with repeats) that item `item`'s
+    /// constraints move.
+    pub fn item_particles(&self, item: usize) -> impl Iterator<Item = u32> + '_ {
+        let (r0, r1) = self.items[item].runs;
+        self.runs[r0 as usize..r1 as usize]
+            .iter()
+            .flat_map(move |run| {
+                let (a, b) = (run.batches.0 as usize, run.batches.1 as usize);
+                let offsets: Box<dyn Iterator<Item = u32> + '_> = match run.kind {
+                    RunKind::Distance => Box::new(
+                        self.distance[a..b]
+                            .iter()
+                            .flat_map(|batch| batch.i.into_iter().chain(batch.j)),
+                    ),
+                    RunKind::Bend { .. } => Box::new(
+                        self.bend[a..b]
+                            .iter()
+                            .flat_map(|batch| batch.v.into_iter().flatten()),
+                    ),
+                };
+                offsets
+            })
+            .map(|o| o / offset(1))
     }
 
     /// The vertices (solver numbering) of lane `lane_id % 8` of check batch `lane_id / 8`.

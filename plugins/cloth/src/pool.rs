@@ -2,16 +2,19 @@
 //!
 //! A step is a fixed list of *phases* (the blocks' work of a substep, the seams, the corners,
 //! …); each phase is a fixed list of *items* (a block, a seam, a range of triangles). Items of
-//! one phase write disjoint data, so they may run in any order on any thread. Every thread —
-//! the caller's and the pool's workers — runs the same loop: wait until the previous phase is
-//! complete, then claim items of this phase (one atomic flag each) until none are left. Each
-//! thread starts claiming at its own place in the list, so that it tends to get the same
-//! blocks in every substep and finds their particles and constraints in its cache. Because
-//! the items and their contents do not depend on which thread runs them, the result is
-//! bit-for-bit the same for any number of threads.
+//! one phase write disjoint data, so they may run in any order on any thread. An item waits
+//! for the whole phase before it, or for the items (of earlier phases) it is given: a particle
+//! group's next substep waits only for its own block and the seams that touch it, not for the
+//! other blocks. Every thread — the caller's and the pool's workers — runs the same loop:
+//! claim (one atomic flag each) and run the first item whose dependencies are finished,
+//! looking from the earliest phase with unclaimed items a few phases ahead. Each thread starts
+//! looking at its own place in a phase's list, so that it tends to get the same blocks in every
+//! substep and finds their particles and constraints in its cache. Because the items and
+//! their contents do not depend on which thread runs them, and each runs after what it reads
+//! has been written, the result is bit-for-bit the same for any number of threads.
 //!
-//! A thread waits for a phase only while another thread is still inside one of its items.
-//! Waiting spins briefly and then yields. Between steps the workers spin for a few tens of
+//! A thread waits only while nothing is ready, that is, while other threads are inside the
+//! items the next ones wait for. Waiting spins briefly and then yields. Between steps the workers spin for a few tens of
 //! microseconds (steps often follow each other closely) and then sleep on a condition
 //! variable; the solver wakes them at the start of a step (`WorkerPool::prewake`), so that
 //! their wake-up overlaps its serial preparations. Waking a thread is a system call, made only
@@ -258,27 +261,57 @@ fn worker_loop(shared: &Shared, thread: usize) {
 #[repr(align(64))]
 struct Padded(AtomicU32);
 
-/// Per-item claim flags and per-phase completion counters.
+/// What an item must wait for before it may run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Dep {
+    /// Item `k` of phase `p`.
+    Item(u32, u32),
+    /// Every item of phase `p`.
+    Phase(u32),
+}
+
+/// Per-item claim and completion flags, per-phase counters, and the items' dependencies.
+///
+/// By default an item waits for every item of the phase before its own (a barrier between
+/// phases). A phase may instead give each of its items its own list of items (or whole
+/// phases) to wait for, all in earlier phases; then a thread that finds nothing ready in the
+/// earliest phase with unclaimed items looks a few phases ahead ([`LOOKAHEAD`]) for an item
+/// that is ready. Which thread runs an item never changes what the item does.
 pub(crate) struct PhaseCounters {
     /// One flag per item of every phase (`first[p]..first[p + 1]` for phase `p`).
     claimed: Vec<AtomicBool>,
+    finished: Vec<AtomicBool>,
     first: Vec<usize>,
+    /// Per phase: items claimed, items finished.
+    taken: Vec<Padded>,
     done: Vec<Padded>,
+    /// Per item (global index): the range of its dependencies in `deps`; `None` for an item
+    /// that waits for the whole previous phase.
+    dep_range: Vec<Option<(u32, u32)>>,
+    deps: Vec<Dep>,
     abort: AtomicBool,
 }
+
+/// How many phases past the earliest one with unclaimed items a thread looks for a ready item.
+const LOOKAHEAD: usize = 4;
 
 impl PhaseCounters {
     pub fn new() -> Self {
         Self {
             claimed: Vec::new(),
+            finished: Vec::new(),
             first: Vec::new(),
+            taken: Vec::new(),
             done: Vec::new(),
+            dep_range: Vec::new(),
+            deps: Vec::new(),
             abort: AtomicBool::new(false),
         }
     }
 
-    /// Makes room for the phases of `items` (item counts) and clears the flags and counters
-    /// (single-threaded, before a run).
+    /// Makes room for the phases of `items` (item counts), each waiting for the whole
+    /// previous phase, and clears the flags and counters (single-threaded, before a run).
+    /// [`Self::set_deps`] then gives phases their own dependencies.
     pub fn reset(&mut self, items: &[u32]) {
         self.first.clear();
         self.first.push(0);
@@ -287,32 +320,72 @@ impl PhaseCounters {
             self.first.push(last + count as usize);
         }
         let total = *self.first.last().expect("first holds 0");
-        if self.claimed.len() < total {
-            self.claimed.resize_with(total, || AtomicBool::new(false));
+        for flags in [&mut self.claimed, &mut self.finished] {
+            if flags.len() < total {
+                flags.resize_with(total, || AtomicBool::new(false));
+            }
+            for c in &mut flags[..total] {
+                *c.get_mut() = false;
+            }
         }
-        for c in &mut self.claimed[..total] {
-            *c.get_mut() = false;
+        for counters in [&mut self.taken, &mut self.done] {
+            if counters.len() < items.len() {
+                counters.resize_with(items.len(), || Padded(AtomicU32::new(0)));
+            }
+            for c in &mut counters[..items.len()] {
+                *c.0.get_mut() = 0;
+            }
         }
-        if self.done.len() < items.len() {
-            self.done
-                .resize_with(items.len(), || Padded(AtomicU32::new(0)));
-        }
-        for c in &mut self.done[..items.len()] {
-            *c.0.get_mut() = 0;
-        }
+        self.dep_range.clear();
+        self.dep_range.resize(total, None);
+        self.deps.clear();
         *self.abort.get_mut() = false;
     }
 
-    /// The loop every thread runs: phases in order, items claimed dynamically.
-    /// `items[p]` is the item count of phase `p` (as given to [`Self::reset`]); `exec(p, k)`
-    /// runs item `k` of phase `p`. Thread `thread` of `threads` tries the items of a phase
-    /// from `thread · count / threads` on, so that each thread tends to get the same items
-    /// (the same blocks of particles, still in its cache) substep after substep, while the
-    /// items left over go to whichever thread is free.
+    /// Gives item `k` of phase `p` the dependencies `deps`, instead of the whole previous
+    /// phase (after [`Self::reset`]). Every dependency must lie in a phase before `p`.
+    pub fn set_deps(&mut self, p: usize, k: u32, deps: impl IntoIterator<Item = Dep>) {
+        let a = self.deps.len();
+        self.deps.extend(deps);
+        assert!(
+            self.deps[a..].iter().all(|d| match *d {
+                Dep::Item(q, k) =>
+                    (q as usize) < p
+                        && k < (self.first[q as usize + 1] - self.first[q as usize]) as u32,
+                Dep::Phase(q) => (q as usize) < p,
+            }),
+            "a dependency of item {k} of phase {p} is not an item of an earlier phase"
+        );
+        self.dep_range[self.first[p] + k as usize] = Some((a as u32, self.deps.len() as u32));
+    }
+
+    /// Whether item `k` of phase `p` may run.
+    fn ready(&self, items: &[u32], p: usize, k: usize) -> bool {
+        let i = self.first[p] + k;
+        let phase_done = |q: usize| self.done[q].0.load(Ordering::Acquire) >= items[q];
+        match self.dep_range[i] {
+            None => p == 0 || phase_done(p - 1),
+            Some((a, b)) => self.deps[a as usize..b as usize].iter().all(|d| match *d {
+                Dep::Item(q, k) => {
+                    self.finished[self.first[q as usize] + k as usize].load(Ordering::Acquire)
+                }
+                Dep::Phase(q) => phase_done(q as usize),
+            }),
+        }
+    }
+
+    /// The loop every thread runs until every item has been claimed: it claims and runs the
+    /// first ready item it finds, looking from the earliest phase with unclaimed items on, in
+    /// phase order. `items[p]` is the item count of phase `p` (as given to [`Self::reset`]);
+    /// `exec(p, k)` runs item `k` of phase `p`. Thread `thread` of `threads` tries the items
+    /// of a phase from `thread · count / threads` on, so that each thread tends to get the
+    /// same items (the same blocks of particles, still in its cache) substep after substep,
+    /// while the items left over go to whichever thread is free.
     ///
-    /// Returns how long this thread waited for other threads to finish phases, and (with more
-    /// than one thread) the longest it spent in one item (an item normally takes microseconds; one that took
-    /// milliseconds was descheduled by the operating system while the thread held it).
+    /// Returns how long this thread waited with nothing ready, and (with more than one
+    /// thread) the longest it spent in one item (an item normally takes microseconds; one
+    /// that took milliseconds was descheduled by the operating system while the thread held
+    /// it).
     pub fn run_phases(
         &self,
         thread: usize,
@@ -321,48 +394,65 @@ impl PhaseCounters {
         exec: &(dyn Fn(usize, u32) + Sync),
     ) -> PhaseTimes {
         let mut times = PhaseTimes::default();
-        for (p, &count) in items.iter().enumerate() {
-            if p > 0 && self.done[p - 1].0.load(Ordering::Acquire) < items[p - 1] {
-                let before = items[p - 1];
-                let start = std::time::Instant::now();
-                let mut spins = 0u32;
-                while self.done[p - 1].0.load(Ordering::Acquire) < before {
-                    if self.abort.load(Ordering::Relaxed) {
-                        times.waited += start.elapsed();
-                        return times;
+        let mut cursor = 0usize;
+        let mut idle: Option<(std::time::Instant, u32)> = None;
+        loop {
+            while cursor < items.len()
+                && self.taken[cursor].0.load(Ordering::Relaxed) >= items[cursor]
+            {
+                cursor += 1;
+            }
+            if cursor == items.len() {
+                break;
+            }
+            let mut ran = false;
+            'scan: for p in cursor..items.len().min(cursor + LOOKAHEAD) {
+                let count = items[p] as usize;
+                let flags = &self.claimed[self.first[p]..self.first[p + 1]];
+                let start = thread * count / threads.max(1);
+                for k in (start..count).chain(0..start) {
+                    let flag = &flags[k];
+                    if flag.load(Ordering::Relaxed) || !self.ready(items, p, k) {
+                        continue;
                     }
-                    if spins < 4_000 {
-                        std::hint::spin_loop();
-                        spins += 1;
-                    } else {
-                        std::thread::yield_now();
+                    if flag.swap(true, Ordering::Relaxed) {
+                        continue;
                     }
+                    self.taken[p].0.fetch_add(1, Ordering::Relaxed);
+                    if let Some((since, _)) = idle.take() {
+                        times.waited += since.elapsed();
+                    }
+                    let guard = AbortOnUnwind(&self.abort);
+                    // Only a thread that others may wait for is timed (two clock reads an item).
+                    let clock = (threads > 1).then(std::time::Instant::now);
+                    exec(p, k as u32);
+                    if let Some(clock) = clock {
+                        times.longest_item = times.longest_item.max(clock.elapsed());
+                    }
+                    std::mem::forget(guard);
+                    self.finished[self.first[p] + k].store(true, Ordering::Release);
+                    self.done[p].0.fetch_add(1, Ordering::Release);
+                    ran = true;
+                    break 'scan;
                 }
-                times.waited += start.elapsed();
             }
-            // Items this thread completed; published once, when no item is left to claim.
-            let mut completed = 0u32;
-            let flags = &self.claimed[self.first[p]..self.first[p + 1]];
-            let count = count as usize;
-            let start = thread * count / threads.max(1);
-            for k in (start..count).chain(0..start) {
-                let flag = &flags[k];
-                if flag.load(Ordering::Relaxed) || flag.swap(true, Ordering::Relaxed) {
-                    continue;
-                }
-                let guard = AbortOnUnwind(&self.abort);
-                // Only a thread that others may wait for is timed (two clock reads an item).
-                let start = (threads > 1).then(std::time::Instant::now);
-                exec(p, k as u32);
-                if let Some(start) = start {
-                    times.longest_item = times.longest_item.max(start.elapsed());
-                }
-                std::mem::forget(guard);
-                completed += 1;
+            if ran {
+                continue;
             }
-            if completed > 0 {
-                self.done[p].0.fetch_add(completed, Ordering::Release);
+            // Nothing ready: another thread holds what the next items wait for.
+            if self.abort.load(Ordering::Relaxed) {
+                break;
             }
+            let (_, spins) = idle.get_or_insert_with(|| (std::time::Instant::now(), 0));
+            if *spins < 4_000 {
+                std::hint::spin_loop();
+                *spins += 1;
+            } else {
+                std::thread::yield_now();
+            }
+        }
+        if let Some((since, _)) = idle {
+            times.waited += since.elapsed();
         }
         times
     }
@@ -474,5 +564,85 @@ mod tests {
             }
             assert_eq!(pool.threads(), threads);
         }
+    }
+
+    /// Phases: 0 (four items), 1 (item k after item k of phase 0), 2 (after all of phase 1,
+    /// its item 1 also after item 3 of phase 0).
+    fn dependent_phases(counters: &mut PhaseCounters) -> [u32; 3] {
+        let items = [4u32, 4, 2];
+        counters.reset(&items);
+        for k in 0..4 {
+            counters.set_deps(1, k, [Dep::Item(0, k)]);
+        }
+        counters.set_deps(2, 0, [Dep::Phase(1)]);
+        counters.set_deps(2, 1, [Dep::Phase(1), Dep::Item(0, 3)]);
+        items
+    }
+
+    #[test]
+    fn items_run_after_what_they_wait_for_on_any_thread_count() {
+        for threads in [1, 2, 4] {
+            let pool = WorkerPool::new(threads);
+            let mut counters = PhaseCounters::new();
+            for _round in 0..50 {
+                let items = dependent_phases(&mut counters);
+                let clock = AtomicU32::new(0);
+                let stamps: Vec<[AtomicU32; 2]> = (0..10)
+                    .map(|_| [AtomicU32::new(0), AtomicU32::new(0)])
+                    .collect();
+                let index = |p: usize, k: u32| [0, 4, 8][p] + k as usize;
+                let exec = |p: usize, k: u32| {
+                    let s = &stamps[index(p, k)];
+                    s[0].store(clock.fetch_add(1, Ordering::SeqCst) + 1, Ordering::SeqCst);
+                    std::hint::black_box((0..1000).sum::<u32>());
+                    s[1].store(clock.fetch_add(1, Ordering::SeqCst) + 1, Ordering::SeqCst);
+                };
+                pool.run(&|thread| {
+                    counters.run_phases(thread, threads, &items, &exec);
+                });
+                let start = |p, k| stamps[index(p, k)][0].load(Ordering::SeqCst);
+                let end = |p, k| stamps[index(p, k)][1].load(Ordering::SeqCst);
+                for k in 0..4 {
+                    assert!(end(0, k) > 0 && end(1, k) > 0, "an item did not run");
+                    assert!(start(1, k) > end(0, k), "item {k} of phase 1 ran too early");
+                    for q in 0..2 {
+                        assert!(start(2, q) > end(1, k), "phase 2 ran before phase 1 ended");
+                    }
+                }
+                assert!(start(2, 1) > end(0, 3));
+            }
+        }
+    }
+
+    #[test]
+    fn a_thread_runs_a_later_phase_item_that_is_ready() {
+        // Item 1 of phase 0 holds its thread until item 0 of phase 1 has run, which only a
+        // thread that looks past the unfinished phase 0 can do.
+        let pool = WorkerPool::new(2);
+        let mut counters = PhaseCounters::new();
+        let items = dependent_phases(&mut counters);
+        let ran_early = AtomicBool::new(false);
+        let gave_up = AtomicBool::new(false);
+        let exec = |p: usize, k: u32| match (p, k) {
+            (0, 1) => {
+                let start = std::time::Instant::now();
+                while !ran_early.load(Ordering::SeqCst) {
+                    if start.elapsed() > std::time::Duration::from_secs(10) {
+                        gave_up.store(true, Ordering::SeqCst);
+                        return;
+                    }
+                    std::thread::yield_now();
+                }
+            }
+            (1, 0) => ran_early.store(true, Ordering::SeqCst),
+            _ => {}
+        };
+        pool.run(&|thread| {
+            counters.run_phases(thread, 2, &items, &exec);
+        });
+        assert!(
+            !gave_up.load(Ordering::SeqCst),
+            "phase 1 waited for all of phase 0"
+        );
     }
 }

@@ -76,7 +76,7 @@ use crate::fabric::Fabric;
 use crate::frame::{FrameInertia, FrameMotion, FrameState, RigidPose};
 use crate::mesh::{ClothMesh, MeshTopology};
 use crate::order::ParticleOrder;
-use crate::pool::{PhaseCounters, SharedSlice, WorkerPool};
+use crate::pool::{Dep, PhaseCounters, SharedSlice, WorkerPool};
 use crate::simd::{Isa, LANES, Lanes, V3, dispatch_lanes, offset};
 use crate::wind::{Wind, triangle_force_lanes};
 
@@ -331,6 +331,94 @@ struct Model {
     attach_slot: Vec<u32>,
     fabric: Fabric,
     settings: SolverSettings,
+    reach: SeparatorReach,
+}
+
+/// Lists of `u32` in one array (`start` has one entry per list, and the total last).
+#[derive(Debug, Clone, Default)]
+struct Lists {
+    start: Vec<u32>,
+    values: Vec<u32>,
+}
+
+impl Lists {
+    fn push(&mut self, list: impl IntoIterator<Item = u32>) {
+        if self.start.is_empty() {
+            self.start.push(0);
+        }
+        self.values.extend(list);
+        self.start.push(self.values.len() as u32);
+    }
+
+    fn get(&self, i: usize) -> &[u32] {
+        &self.values[self.start[i] as usize..self.start[i + 1] as usize]
+    }
+}
+
+/// Which particle groups and blocks each separator (seam or corner) moves particles of, and
+/// the separators that move particles of each group: what a step's items wait for (see
+/// `ClothSolver::set_dependencies`).
+#[derive(Debug, Clone, Default)]
+struct SeparatorReach {
+    /// Per separator (constraint item `blocks + j`): the groups and the blocks it touches.
+    groups: Lists,
+    blocks: Lists,
+    /// Per separator: its level and its index in that level's phase.
+    place: Vec<(u32, u32)>,
+    /// Per particle group: the separators that touch it.
+    of_group: Lists,
+}
+
+impl SeparatorReach {
+    fn new(order: &ParticleOrder, constraints: &ConstraintSet) -> Self {
+        let n = order.to_mesh.len() as u32;
+        let blocks = order.blocks();
+        let mut reach = Self::default();
+        let mut of_group = vec![Vec::new(); blocks * PARTICLE_GROUPS];
+        for (level, &(a, b)) in constraints.separator_levels.iter().enumerate() {
+            for item in a..b {
+                let mut particles: Vec<u32> = constraints
+                    .item_particles(item as usize)
+                    .filter(|&i| i < n)
+                    .collect();
+                particles.sort_unstable();
+                particles.dedup();
+                let mut groups: Vec<u32> = particles.iter().map(|&i| group_of(order, i)).collect();
+                groups.dedup();
+                let mut touched: Vec<u32> =
+                    groups.iter().map(|&g| g / PARTICLE_GROUPS as u32).collect();
+                touched.dedup();
+                let j = item as usize - blocks;
+                debug_assert_eq!(j, reach.place.len());
+                for &g in &groups {
+                    of_group[g as usize].push(j as u32);
+                }
+                reach.groups.push(groups);
+                reach.blocks.push(touched);
+                reach.place.push((level as u32, item - a));
+            }
+        }
+        for list in of_group {
+            reach.of_group.push(list);
+        }
+        reach
+    }
+}
+
+/// The particle group (`PARTICLE_GROUPS` per block, each a run of the block's chunks, as
+/// `StepContext::group_particles` splits them) that holds particle `i`.
+fn group_of(order: &ParticleOrder, i: u32) -> u32 {
+    let block = order.block_of(i) as usize;
+    let chunk = order.chunk_start.partition_point(|&s| s <= i) - 1;
+    let (first, end) = (
+        order.block_chunks[block] as usize,
+        order.block_chunks[block + 1] as usize,
+    );
+    let count = end - first;
+    let part = (0..PARTICLE_GROUPS)
+        .find(|&p| chunk < first + (p + 1) * count / PARTICLE_GROUPS)
+        .unwrap_or(PARTICLE_GROUPS - 1);
+    (block * PARTICLE_GROUPS + part) as u32
 }
 
 #[derive(Debug, Clone, Copy, Default)]
@@ -599,6 +687,7 @@ impl ClothSolver {
         xs.resize(n + constraints.padding_particles(), Vec3A::ZERO);
         let targets: Vec<Vec3A> = attached.iter().map(|&v| x[v as usize]).collect();
         let keep_lambda = settings.iterations > 1;
+        let reach = SeparatorReach::new(&order, &constraints);
         let blocks = order.blocks();
         let items = constraints.items.len();
         let distance_batches = constraints.distance.len();
@@ -621,6 +710,7 @@ impl ClothSolver {
                 attach_slot,
                 fabric,
                 settings,
+                reach,
             },
             xs_prev: xs[..n].to_vec(),
             xs,
@@ -1108,6 +1198,7 @@ impl ClothSolver {
         }
 
         self.counters.reset(&self.phase_items);
+        self.set_dependencies();
         {
             let context = StepContext {
                 model: &self.model,
@@ -1168,6 +1259,100 @@ impl ClothSolver {
         self.spheres_start.clone_from(&self.spheres_end);
         self.time += dt as f64;
         Ok(self.report())
+    }
+
+    /// What each item of the step's phases waits for, instead of the whole phase before it:
+    ///
+    /// - a particle group's substep waits for its block's constraints and the separators
+    ///   that touch its particles (the first one for the aerodynamic forces);
+    /// - a block's constraints wait for its particle groups (a further iteration: for its
+    ///   last constraint pass and the separators that touch it);
+    /// - a seam waits for the blocks it joins; a corner also for every seam;
+    /// - a block's finish waits as its particle groups would.
+    ///
+    /// So a thread that is done with its block goes on with the next substep of the groups
+    /// that no separator touches while the other thread is still in its block, and the
+    /// separators run beside other work. Each item reads and writes what it did before, in an
+    /// order these dependencies keep: the results do not change.
+    fn set_dependencies(&mut self) {
+        let blocks = self.model.order.blocks();
+        let reach = &self.model.reach;
+        let counters = &mut self.counters;
+        let mut aero = None;
+        let mut last_block: Option<u32> = None;
+        // The phases of the separator levels since the last block phase.
+        let mut separators: Vec<u32> = Vec::new();
+        let mut deps: Vec<Dep> = Vec::new();
+        let group_deps = |deps: &mut Vec<Dep>, g: usize, separators: &[u32]| {
+            for &j in reach.of_group.get(g) {
+                let (level, k) = reach.place[j as usize];
+                if let Some(&p) = separators.get(level as usize) {
+                    deps.push(Dep::Item(p, k));
+                }
+            }
+        };
+        for (p, phase) in self.phases.iter().enumerate() {
+            let pu = p as u32;
+            match *phase {
+                Phase::AeroTriangles => aero = Some(pu),
+                Phase::Particles { .. } => {
+                    for g in 0..blocks * PARTICLE_GROUPS {
+                        deps.clear();
+                        match last_block {
+                            Some(b) => {
+                                deps.push(Dep::Item(b, (g / PARTICLE_GROUPS) as u32));
+                                group_deps(&mut deps, g, &separators);
+                            }
+                            None => deps.extend(aero.map(Dep::Phase)),
+                        }
+                        counters.set_deps(p, g as u32, deps.iter().copied());
+                    }
+                }
+                Phase::Block { .. } => {
+                    for x in 0..blocks {
+                        let groups = x * PARTICLE_GROUPS..(x + 1) * PARTICLE_GROUPS;
+                        counters.set_deps(p, x as u32, groups.map(|g| Dep::Item(pu - 1, g as u32)));
+                    }
+                    last_block = Some(pu);
+                    separators.clear();
+                }
+                Phase::BlockIteration | Phase::Finish => {
+                    for x in 0..blocks {
+                        deps.clear();
+                        deps.extend(last_block.map(|b| Dep::Item(b, x as u32)));
+                        for g in x * PARTICLE_GROUPS..(x + 1) * PARTICLE_GROUPS {
+                            group_deps(&mut deps, g, &separators);
+                        }
+                        counters.set_deps(p, x as u32, deps.iter().copied());
+                    }
+                    if matches!(phase, Phase::BlockIteration) {
+                        last_block = Some(pu);
+                        separators.clear();
+                    }
+                }
+                Phase::Separators { level, .. } => {
+                    let (a, b) = self.model.constraints.separator_levels[level as usize];
+                    for k in 0..b - a {
+                        deps.clear();
+                        let j = (a + k) as usize - blocks;
+                        deps.extend(
+                            reach
+                                .blocks
+                                .get(j)
+                                .iter()
+                                .filter_map(|&x| last_block.map(|b| Dep::Item(b, x))),
+                        );
+                        if level > 0 {
+                            deps.push(Dep::Phase(pu - 1));
+                        }
+                        counters.set_deps(p, k, deps.iter().copied());
+                    }
+                    separators.push(pu);
+                }
+                // After every block's finish (the phase before).
+                Phase::SeparatorStretch => {}
+            }
+        }
     }
 
     fn report(&self) -> StepReport {

@@ -1,6 +1,7 @@
 //! The result of a step does not depend on the number of threads: 1, 2 and 4 threads give
 //! bit-for-bit the same positions in a scene that exercises every phase (wind gusts, drag and
-//! lift, moving attachments, moving colliders, a moving body frame, several iterations).
+//! lift, moving attachments, moving colliders, a moving body frame, several iterations), on a
+//! mesh of two blocks (one seam) and one of four (seams and corners).
 
 mod common;
 
@@ -10,9 +11,9 @@ use fitroom_cloth::{
 };
 use glam::{Quat, Vec3};
 
-fn run(threads: usize) -> Vec<[u32; 3]> {
-    let mesh = ClothMesh::cylinder(Vec3::new(0.0, 0.4, 0.0), 0.25, 0.6, 48, 24).unwrap();
-    let top: Vec<u32> = ClothMesh::cylinder_ring(48, 24).collect();
+fn run(threads: usize, (around, rows): (u32, u32)) -> Vec<[u32; 3]> {
+    let mesh = ClothMesh::cylinder(Vec3::new(0.0, 0.4, 0.0), 0.25, 0.6, around, rows).unwrap();
+    let top: Vec<u32> = ClothMesh::cylinder_ring(around, rows).collect();
     let settings = SolverSettings {
         threads,
         iterations: 2,
@@ -60,18 +61,21 @@ fn run(threads: usize) -> Vec<[u32; 3]> {
 
 #[test]
 fn one_two_and_four_threads_give_identical_bits() {
-    let one = run(1);
-    assert_eq!(one, run(1), "not repeatable on one thread");
-    let two = run(2);
-    let four = run(4);
-    let differing = one.iter().zip(&two).filter(|(a, b)| a != b).count();
-    assert_eq!(
-        differing, 0,
-        "2 threads differ from 1 in {differing} particles"
-    );
-    let differing = one.iter().zip(&four).filter(|(a, b)| a != b).count();
-    assert_eq!(
-        differing, 0,
-        "4 threads differ from 1 in {differing} particles"
-    );
+    // 1,152 particles make two blocks; 5,120 make four (a block per 1,024 or more).
+    for mesh in [(48, 24), (80, 64)] {
+        let one = run(1, mesh);
+        assert_eq!(one, run(1, mesh), "not repeatable on one thread");
+        let two = run(2, mesh);
+        let four = run(4, mesh);
+        let differing = one.iter().zip(&two).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            differing, 0,
+            "{mesh:?}: 2 threads differ from 1 in {differing} particles"
+        );
+        let differing = one.iter().zip(&four).filter(|(a, b)| a != b).count();
+        assert_eq!(
+            differing, 0,
+            "{mesh:?}: 4 threads differ from 1 in {differing} particles"
+        );
+    }
 }
