@@ -478,9 +478,10 @@ impl Drop for AbortOnUnwind<'_> {
 
 /// A slice that several threads may read and write at once, through raw accesses.
 ///
-/// Soundness rests on the phase structure: within one phase no element is written by one
-/// item and read or written by another, and phases are separated by the Release/Acquire
-/// completion counters of [`PhaseCounters`]. Indices are validated when the constraints are
+/// Soundness rests on the phase structure: no element is written by one item and read or
+/// written by another that may run at the same time (an item of the same phase, or of a later
+/// one that does not wait for it), and an item that waits for another sees its writes through
+/// the Release/Acquire completion flags and counters of [`PhaseCounters`]. Indices are validated when the constraints are
 /// built; accesses are bounds-checked in debug builds.
 pub(crate) struct SharedSlice<'a, T> {
     ptr: *mut T,

@@ -435,7 +435,7 @@ enum Phase {
     AeroTriangles,
     /// Per group of collision chunks (a part of a block, see `PARTICLE_GROUPS`): finish
     /// substep `sub - 1` (if `sub > 0`) and predict substep `sub`. At `sub == 0` the group also
-    /// reads the positions from the mesh-ordered copy and gathers its aerodynamic forces.
+    /// gathers its particles' aerodynamic forces.
     Particles {
         sub: u32,
     },
@@ -483,6 +483,10 @@ struct StepConstants {
     /// the test that compares the two paths).
     #[cfg(test)]
     group_collisions: bool,
+    /// Whether the second collision pass tests only the shapes before the last mover (always,
+    /// except in the test that compares it with testing every shape).
+    #[cfg(test)]
+    prune_passes: bool,
     // Aerodynamics.
     air_density: f32,
     drag: f32,
@@ -556,6 +560,9 @@ pub struct ClothSolver {
     /// See `StepConstants::group_collisions`.
     #[cfg(test)]
     group_collisions: bool,
+    /// See `StepConstants::prune_passes`.
+    #[cfg(test)]
+    prune_passes: bool,
     counters: PhaseCounters,
     phases: Vec<Phase>,
     phase_items: Vec<u32>,
@@ -746,6 +753,8 @@ impl ClothSolver {
             isa: Isa::detect(),
             #[cfg(test)]
             group_collisions: true,
+            #[cfg(test)]
+            prune_passes: true,
             counters: PhaseCounters::new(),
             phases: Vec::new(),
             phase_items: Vec::new(),
@@ -1121,6 +1130,8 @@ impl ClothSolver {
             colliders: self.capsules.len() + self.solo_spheres.len(),
             #[cfg(test)]
             group_collisions: self.group_collisions,
+            #[cfg(test)]
+            prune_passes: self.prune_passes,
             air_density: settings.air_density_kg_m3,
             drag: fabric.drag_coefficient,
             lift: fabric.lift_coefficient,
@@ -2034,9 +2045,12 @@ impl StepContext<'_> {
     ///
     /// A pass tests the colliders, then the planes, in the scene's order, and is repeated
     /// while it moves the particle. The pass after the first tests only the shapes before the
-    /// last one that moved it: those after it tested the particle where it still is and left
-    /// it there, and a shape leaves a particle it moved on its skin, where it does not move it
-    /// again (`CONTACT_TOLERANCE`). A third pass tests every shape.
+    /// last one that moved it, if the particle ended the first pass within the box of its
+    /// path at the start of that pass (the box a collider's bounds were screened with): the
+    /// shapes after the last mover tested it where it still is, or were screened out by a box
+    /// that holds its new path, and a shape leaves a particle it moved on its skin, where it
+    /// does not move it again (`CONTACT_TOLERANCE`). Otherwise, and in a third pass, every
+    /// shape is tested.
     ///
     /// # Safety
     /// Particle `i` belongs to the calling item.
@@ -2056,6 +2070,9 @@ impl StepContext<'_> {
         let mut settled = true;
         // Shapes (colliders, then planes) this pass tests: those before `limit`.
         let mut limit = usize::MAX;
+        // SAFETY: the caller's contract (the particle's position before the first pass).
+        let before = unsafe { self.xs.get(i) };
+        let (box_low, box_high) = (start.min(before), start.max(before));
         for pass in 0..3 {
             // The place of the last shape that moved the particle in this pass.
             let mut last: Option<usize> = None;
@@ -2110,7 +2127,16 @@ impl StepContext<'_> {
             if scene.shapes < 2 {
                 break;
             }
-            limit = if pass == 0 { last } else { usize::MAX };
+            #[cfg(test)]
+            let prune = k.prune_passes;
+            #[cfg(not(test))]
+            let prune = true;
+            let in_box = prune && p.cmpge(box_low).all() && p.cmple(box_high).all();
+            limit = if pass == 0 && in_box {
+                last
+            } else {
+                usize::MAX
+            };
             settled = pass < 2;
         }
         if !settled {
@@ -3021,10 +3047,12 @@ mod tests {
         // A skirt tethered to its waist, around overlapping spheres and capsules (hips, swinging
         // thighs, pelvis) and standing on the floor: screening eight particles per collider must
         // give the one-particle pass's positions bit for bit, through the later passes, the
-        // floor, the crease between overlapping shapes and the tether repairs.
-        let run = |group: bool, colliders: bool| {
+        // floor, the crease between overlapping shapes and the tether repairs; and a second
+        // pass over only the shapes before the last mover the positions of one over all.
+        let run = |group: bool, colliders: bool, prune: bool| {
             let mut cloth = skirt_on_two_threads(Vec3::ZERO, 0.22, 0.95);
             cloth.group_collisions = group;
+            cloth.prune_passes = prune;
             cloth
                 .set_planes(&[Plane::floor(0.0)])
                 .expect("a valid floor");
@@ -3048,10 +3076,12 @@ mod tests {
             }
             position_bits(&cloth)
         };
-        let grouped = run(true, true);
-        assert_eq!(grouped, run(false, true));
+        let grouped = run(true, true, true);
+        assert_eq!(grouped, run(false, true, true));
+        // The second pass gives what testing every shape again gives.
+        assert_eq!(grouped, run(true, true, false));
         // The colliders did move the cloth.
-        assert_ne!(grouped, run(true, false));
+        assert_ne!(grouped, run(true, false, true));
     }
 
     #[test]
@@ -3092,6 +3122,7 @@ mod tests {
             }),
             colliders: 0,
             group_collisions: true,
+            prune_passes: true,
             air_density: 0.0,
             drag: 0.0,
             lift: 0.0,
