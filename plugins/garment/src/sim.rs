@@ -207,13 +207,19 @@ pub fn fit_to_anchors(
     // The bounds of runs of `ANCHOR_RUN` consecutive anchors: a garment's attached vertices
     // come in mesh order, where neighbours stay together, so a collider skips most anchors
     // far from it a run at a time.
+    // A run with an anchor that is not finite is unbounded: its anchors are tested (and that
+    // one skipped) one by one.
     let runs: Vec<(Vec3, Vec3)> = anchors
         .chunks(ANCHOR_RUN)
         .map(|run| {
-            run.iter().fold(
-                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                |(lo, hi), &p| (lo.min(p), hi.max(p)),
-            )
+            if run.iter().all(|p| p.is_finite()) {
+                run.iter().fold(
+                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                    |(lo, hi), &p| (lo.min(p), hi.max(p)),
+                )
+            } else {
+                (Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY))
+            }
         })
         .collect();
     let mut largest = 0.0f32;
@@ -224,8 +230,6 @@ pub fn fit_to_anchors(
         let axis = *b - *a;
         let len2 = axis.length_squared();
         let (mut cut_a, mut cut_b) = (0.0f32, 0.0f32);
-        // A run with a NaN anchor has NaN bounds, which meet every box: its anchors are
-        // tested (and skipped) one by one.
         let near = runs
             .iter()
             .zip(anchors.chunks(ANCHOR_RUN))
@@ -251,8 +255,14 @@ pub fn fit_to_anchors(
             } else {
                 0.0
             };
-            // (A millimetre's tenth for rounding.)
-            let within = *ra + (*rb - *ra) * t + skin + 1e-4;
+            // (A degenerate cone is a ball of the larger radius; a millimetre's tenth for
+            // rounding.)
+            let radius = if len2 > 1e-12 {
+                *ra + (*rb - *ra) * t
+            } else {
+                ra.max(*rb)
+            };
+            let within = radius + skin + 1e-4;
             if (p - (*a + axis * t)).length_squared() * keep > within * within {
                 continue;
             }
@@ -867,18 +877,28 @@ mod tests {
             .iter()
             .map(|&(a, b, ra, rb)| {
                 let (mut cut_a, mut cut_b) = (0.0f32, 0.0f32);
+                // A ball (both ends at one point) shrinks as one, by the deepest anchor.
+                let ball = a == b;
                 for &p in anchors {
                     let depth = skin - round_cone_distance(p, a, b, ra, rb);
                     if depth.is_nan() || depth <= 0.0 {
                         continue;
                     }
                     let axis = b - a;
-                    let t = ((p - a).dot(axis) / axis.length_squared()).clamp(0.0, 1.0);
+                    let t = if ball {
+                        0.0
+                    } else {
+                        ((p - a).dot(axis) / axis.length_squared()).clamp(0.0, 1.0)
+                    };
                     if t < 0.5 {
                         cut_a = cut_a.max(depth / (1.0 - t));
                     } else {
                         cut_b = cut_b.max(depth / t);
                     }
+                }
+                if ball {
+                    let cut = cut_a.max(cut_b).min(MAX_COLLIDER_SHRINK * ra);
+                    return (cut, cut);
                 }
                 (
                     cut_a.min(MAX_COLLIDER_SHRINK * ra),
@@ -909,11 +929,12 @@ mod tests {
             let a = Vec3::new(r(0.3), r(0.6), r(0.3));
             let b = a + Vec3::new(r(0.1), r(0.3), r(0.1));
             let (ra, rb) = (0.03 + r(0.02).abs(), 0.03 + r(0.02).abs());
-            // Every fourth collider short and steeply tapered (radii 6 and 2 cm, 8 cm apart).
-            let (b, rb, ra) = if case % 4 == 3 {
-                (a + (b - a).normalize_or(Vec3::Y) * 0.08, 0.02, 0.06)
-            } else {
-                (b, rb, ra)
+            // Every fourth collider short and steeply tapered (radii 6 and 2 cm, 8 cm apart),
+            // every tenth a ball (both ends at one point) of unequal radii.
+            let (b, rb, ra) = match case % 20 {
+                3 | 7 | 11 | 15 | 19 => (a + (b - a).normalize_or(Vec3::Y) * 0.08, 0.02, 0.06),
+                0 | 10 => (a, 0.06, 0.03),
+                _ => (b, rb, ra),
             };
             let colliders = [(a, b, ra, rb), (b, a, rb, ra)];
             // A few anchors anywhere (so runs start at different places), then neighbours a
@@ -941,8 +962,10 @@ mod tests {
                 anchors.push(p);
                 p += Vec3::new(r(0.0005), r(0.0005), r(0.0005));
             }
+            // Now and then a NaN amid the run, after anchors that cut.
             if case % 10 == 0 {
-                anchors.push(Vec3::NAN);
+                let at = anchors.len() - 4;
+                anchors.insert(at, Vec3::NAN);
             }
             let expected = cuts_one_by_one(&colliders, &anchors, skin);
             let mut fitted = colliders;
