@@ -355,13 +355,12 @@ impl Lists {
     }
 }
 
-/// Which particle groups and blocks each separator (seam or corner) moves particles of, and
+/// Which blocks each separator (seam or corner) moves particles of, and
 /// the separators that move particles of each group: what a step's items wait for (see
 /// `ClothSolver::set_dependencies`).
 #[derive(Debug, Clone, Default)]
 struct SeparatorReach {
-    /// Per separator (constraint item `blocks + j`): the groups and the blocks it touches.
-    groups: Lists,
+    /// Per separator (constraint item `blocks + j`): the blocks it touches.
     blocks: Lists,
     /// Per separator: its level and its index in that level's phase.
     place: Vec<(u32, u32)>,
@@ -393,7 +392,6 @@ impl SeparatorReach {
                 for &g in &groups {
                     of_group[g as usize].push(j as u32);
                 }
-                reach.groups.push(groups);
                 reach.blocks.push(touched);
                 reach.place.push((level as u32, item - a));
             }
