@@ -321,24 +321,26 @@ impl PhaseCounters {
         }
         let total = *self.first.last().expect("first holds 0");
         for flags in [&mut self.claimed, &mut self.finished] {
-            if flags.len() < total {
-                flags.resize_with(total, || AtomicBool::new(false));
-            }
-            for c in &mut flags[..total] {
-                *c.get_mut() = false;
-            }
+            flags.resize_with(total, || AtomicBool::new(false));
         }
         for counters in [&mut self.taken, &mut self.done] {
-            if counters.len() < items.len() {
-                counters.resize_with(items.len(), || Padded(AtomicU32::new(0)));
-            }
-            for c in &mut counters[..items.len()] {
-                *c.0.get_mut() = 0;
-            }
+            counters.resize_with(items.len(), || Padded(AtomicU32::new(0)));
         }
         self.dep_range.clear();
         self.dep_range.resize(total, None);
         self.deps.clear();
+        self.clear();
+    }
+
+    /// Clears the flags and counters for another run of the same phases and dependencies
+    /// (single-threaded, before a run).
+    pub fn clear(&mut self) {
+        for flag in self.claimed.iter_mut().chain(&mut self.finished) {
+            *flag.get_mut() = false;
+        }
+        for counter in self.taken.iter_mut().chain(&mut self.done) {
+            *counter.0.get_mut() = 0;
+        }
         *self.abort.get_mut() = false;
     }
 

@@ -564,6 +564,8 @@ pub struct ClothSolver {
     counters: PhaseCounters,
     phases: Vec<Phase>,
     phase_items: Vec<u32>,
+    /// What `phases` was built for: substeps, iterations, aerodynamics.
+    program: Option<(u32, u32, bool)>,
     block_health: Vec<ItemHealth>,
     /// Per constraint item: largest squared stretch ratio and its distance lane.
     stretch_health: Vec<(f32, u32)>,
@@ -756,6 +758,7 @@ impl ClothSolver {
             counters: PhaseCounters::new(),
             phases: Vec::new(),
             phase_items: Vec::new(),
+            program: None,
             block_health: vec![ItemHealth::default(); blocks],
             stretch_health: vec![(0.0, u32::MAX); items],
         })
@@ -1165,49 +1168,18 @@ impl ClothSolver {
             self.external_dirty = false;
         }
 
-        // The phase program of this step.
-        let blocks = self.model.order.blocks() as u32;
-        let groups = blocks * PARTICLE_GROUPS as u32;
-        let levels = &self.model.constraints.separator_levels;
-        self.phases.clear();
-        self.phase_items.clear();
-        let mut push = |phase: Phase, items: u32| {
-            self.phases.push(phase);
-            self.phase_items.push(items);
-        };
         if aero {
             self.external_dirty = true;
-            let tris = self.model.triangles.len().div_ceil(TRIANGLE_ITEM) as u32;
-            push(Phase::AeroTriangles, tris);
         }
-        for sub in 0..substeps {
-            for iteration in 0..settings.iterations {
-                if iteration == 0 {
-                    push(Phase::Particles { sub }, groups);
-                    push(Phase::Block { sub }, blocks);
-                } else {
-                    push(Phase::BlockIteration, blocks);
-                }
-                for (level, &(a, b)) in levels.iter().enumerate() {
-                    push(
-                        Phase::Separators {
-                            level: level as u32,
-                            first: iteration == 0,
-                            new_frame: sub == 0 && iteration == 0,
-                        },
-                        b - a,
-                    );
-                }
-            }
+        // The phase program and its dependencies depend only on these; steps with the same
+        // ones reuse them and only clear the counters.
+        let program = (substeps, settings.iterations, aero);
+        if self.program != Some(program) {
+            self.build_program(substeps, settings.iterations, aero);
+            self.program = Some(program);
+        } else {
+            self.counters.clear();
         }
-        push(Phase::Finish, blocks);
-        let separators = self.model.constraints.items.len() as u32 - blocks;
-        if separators > 0 {
-            push(Phase::SeparatorStretch, separators);
-        }
-
-        self.counters.reset(&self.phase_items);
-        self.set_dependencies();
         {
             let context = StepContext {
                 model: &self.model,
@@ -1268,6 +1240,52 @@ impl ClothSolver {
         self.spheres_start.clone_from(&self.spheres_end);
         self.time += dt as f64;
         Ok(self.report())
+    }
+
+    /// The phase program of a step of `substeps` substeps and `iterations` constraint
+    /// iterations (with the aerodynamics phase if `aero`), its item counts and dependencies.
+    fn build_program(&mut self, substeps: u32, iterations: u32, aero: bool) {
+        let blocks = self.model.order.blocks() as u32;
+        let groups = blocks * PARTICLE_GROUPS as u32;
+        let levels = &self.model.constraints.separator_levels;
+        self.phases.clear();
+        self.phase_items.clear();
+        let mut push = |phase: Phase, items: u32| {
+            self.phases.push(phase);
+            self.phase_items.push(items);
+        };
+        if aero {
+            let tris = self.model.triangles.len().div_ceil(TRIANGLE_ITEM) as u32;
+            push(Phase::AeroTriangles, tris);
+        }
+        for sub in 0..substeps {
+            for iteration in 0..iterations {
+                if iteration == 0 {
+                    push(Phase::Particles { sub }, groups);
+                    push(Phase::Block { sub }, blocks);
+                } else {
+                    push(Phase::BlockIteration, blocks);
+                }
+                for (level, &(a, b)) in levels.iter().enumerate() {
+                    push(
+                        Phase::Separators {
+                            level: level as u32,
+                            first: iteration == 0,
+                            new_frame: sub == 0 && iteration == 0,
+                        },
+                        b - a,
+                    );
+                }
+            }
+        }
+        push(Phase::Finish, blocks);
+        let separators = self.model.constraints.items.len() as u32 - blocks;
+        if separators > 0 {
+            push(Phase::SeparatorStretch, separators);
+        }
+
+        self.counters.reset(&self.phase_items);
+        self.set_dependencies();
     }
 
     /// What each item of the step's phases waits for, instead of the whole phase before it:
@@ -3038,6 +3056,42 @@ mod tests {
             position_bits(&cloth)
         };
         assert_eq!(run(Isa::Baseline), run(Isa::Avx));
+    }
+
+    #[test]
+    fn new_settings_between_steps_step_as_a_cloth_built_with_them() {
+        // The phase program is kept from step to step while substeps, iterations and the
+        // aerodynamics stay; changing them must step as a cloth built with the new ones.
+        let spheres = [
+            Sphere::new(Vec3::new(-0.1, 0.85, 0.0), 0.12),
+            Sphere::new(Vec3::new(0.1, 0.85, 0.0), 0.12),
+        ];
+        let later = SolverSettings {
+            threads: 2,
+            substeps: 4,
+            iterations: 2,
+            ..SolverSettings::default()
+        };
+        let run = |cloth: &mut ClothSolver, steps: usize| {
+            for _ in 0..steps {
+                cloth.set_colliders(&spheres, &[]).expect("valid colliders");
+                cloth.step(1.0 / 120.0).expect("a valid step");
+            }
+        };
+        let mut changed = skirt_on_two_threads(Vec3::ZERO, 0.22, 0.95);
+        let rest: Vec<Vec3> = changed.positions().iter().map(|&p| p.into()).collect();
+        run(&mut changed, 5);
+        changed.set_settings(later).expect("valid settings");
+        changed.reset_to(&rest).expect("valid positions");
+        run(&mut changed, 20);
+        let mut built = skirt_on_two_threads(Vec3::ZERO, 0.22, 0.95);
+        built.set_settings(later).expect("valid settings");
+        run(&mut built, 20);
+        assert_eq!(position_bits(&changed), position_bits(&built));
+        // With the old program it would not: 10 substeps, 1 iteration.
+        let mut kept = skirt_on_two_threads(Vec3::ZERO, 0.22, 0.95);
+        run(&mut kept, 20);
+        assert_ne!(position_bits(&kept), position_bits(&built));
     }
 
     #[test]
