@@ -123,6 +123,8 @@ pub struct GarmentSim {
     /// step before the last one.
     posed: Vec<(Vec3, Vec3, f32, f32)>,
     spare_targets: Vec<Vec3>,
+    /// Room for [`fit_to_anchors_with`]'s run bounds.
+    anchor_runs: Vec<(Vec3, Vec3)>,
 }
 
 /// An attached vertex moving farther than this in one step means the body was teleported
@@ -204,24 +206,32 @@ pub fn fit_to_anchors(
     anchors: &[Vec3],
     skin: f32,
 ) -> f32 {
+    fit_to_anchors_with(colliders, anchors, skin, &mut Vec::new())
+}
+
+/// [`fit_to_anchors`] with `runs` as room for the anchor runs' bounds (kept from step to step).
+fn fit_to_anchors_with(
+    colliders: &mut [(Vec3, Vec3, f32, f32)],
+    anchors: &[Vec3],
+    skin: f32,
+    runs: &mut Vec<(Vec3, Vec3)>,
+) -> f32 {
     // The bounds of runs of `ANCHOR_RUN` consecutive anchors: a garment's attached vertices
     // come in mesh order, where neighbours stay together, so a collider skips most anchors
     // far from it a run at a time.
     // A run with an anchor that is not finite is unbounded: its anchors are tested (and that
     // one skipped) one by one.
-    let runs: Vec<(Vec3, Vec3)> = anchors
-        .chunks(ANCHOR_RUN)
-        .map(|run| {
-            if run.iter().all(|p| p.is_finite()) {
-                run.iter().fold(
-                    (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-                    |(lo, hi), &p| (lo.min(p), hi.max(p)),
-                )
-            } else {
-                (Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY))
-            }
-        })
-        .collect();
+    runs.clear();
+    runs.extend(anchors.chunks(ANCHOR_RUN).map(|run| {
+        if run.iter().all(|p| p.is_finite()) {
+            run.iter().fold(
+                (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
+                |(lo, hi), &p| (lo.min(p), hi.max(p)),
+            )
+        } else {
+            (Vec3::splat(f32::NEG_INFINITY), Vec3::splat(f32::INFINITY))
+        }
+    }));
     let mut largest = 0.0f32;
     for (a, b, ra, rb) in colliders.iter_mut() {
         let reach = ra.max(*rb) + skin;
@@ -478,6 +488,7 @@ impl GarmentSim {
             capsules: Vec::new(),
             posed: Vec::new(),
             spare_targets: Vec::new(),
+            anchor_runs: Vec::new(),
         })
     }
 
@@ -642,7 +653,12 @@ impl GarmentSim {
         self.solver.set_attachment_targets(&targets)?;
         let mut posed = std::mem::take(&mut self.posed);
         self.colliders.posed_into(skinning, &mut posed);
-        let collider_shrink_m = fit_to_anchors(&mut posed, &targets, BODY_SKIN_OFFSET_M);
+        let collider_shrink_m = fit_to_anchors_with(
+            &mut posed,
+            &targets,
+            BODY_SKIN_OFFSET_M,
+            &mut self.anchor_runs,
+        );
         if let Some(old) = self.last_targets.replace(targets) {
             self.spare_targets = old;
         }
