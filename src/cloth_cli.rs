@@ -186,6 +186,90 @@ pub fn sim(
     sim_mesh(model, &shaped, &mesh, motion, frames, threads)
 }
 
+/// The body walking a motion as the cloth sees it: the motion pipeline's 30 Hz poses,
+/// interpolated to the 120 Hz cloth steps, as skinning transforms. Frames past the clip's end
+/// wrap to its start.
+pub struct Walk<'a> {
+    /// The floor's height in the motion's space.
+    pub floor_y: f32,
+    /// The skinning at the first frame.
+    pub first: Vec<Affine3A>,
+    rest: &'a fitroom_body::RestPose,
+    pipeline: AvatarPipeline,
+    stream: Vec<fitroom_sensor::SensorFrame>,
+    next: usize,
+    last: (Vec<Quat>, Vec<Vec3>),
+}
+
+impl<'a> Walk<'a> {
+    /// The body `shaped` walking the BVH clip `motion`.
+    pub fn new(model: &BodyModel, shaped: &'a ShapedBody, motion: &Path) -> Result<Self> {
+        let source = BvhSource::load(motion, Default::default())
+            .with_context(|| format!("cannot load the motion '{}'", motion.display()))?;
+        let floor_y = -source.options().sensor_height_m;
+        let skeleton = fitroom_motion::avatar_skeleton(model, &shaped.rest_pose)?;
+        let mut pipeline = AvatarPipeline::new(&skeleton, floor_y)?;
+        let stream = clean_stream(&source);
+        let Some(frame) = stream.first() else {
+            bail!("'{}' has no frames", motion.display());
+        };
+        let pose = pipeline.pose(frame, WALK_FRAME_S);
+        let last = (pose.rotations.clone(), pose.heads.clone());
+        Ok(Self {
+            floor_y,
+            first: skinning_of(&shaped.rest_pose, &last.0, &last.1),
+            rest: &shaped.rest_pose,
+            pipeline,
+            stream,
+            next: 1,
+            last,
+        })
+    }
+
+    /// The skinning of each 120 Hz step of the next frame.
+    pub fn next_frame(&mut self) -> Vec<Vec<Affine3A>> {
+        let frame = &self.stream[self.next % self.stream.len()];
+        self.next += 1;
+        let pose = self.pipeline.pose(frame, WALK_FRAME_S);
+        let now = (pose.rotations.clone(), pose.heads.clone());
+        let (r0, h0) = std::mem::replace(&mut self.last, now);
+        let now = &self.last;
+        let per_frame = (STEP_HZ * WALK_FRAME_S).round() as usize;
+        (1..=per_frame)
+            .map(|k| {
+                let t = k as f32 / per_frame as f32;
+                let rot: Vec<Quat> = r0.iter().zip(&now.0).map(|(a, b)| a.slerp(*b, t)).collect();
+                let head: Vec<Vec3> = h0.iter().zip(&now.1).map(|(a, b)| a.lerp(*b, t)).collect();
+                skinning_of(self.rest, &rot, &head)
+            })
+            .collect()
+    }
+}
+
+/// The motion's frame interval as the walk plays it, s.
+const WALK_FRAME_S: f32 = 1.0 / 30.0;
+
+/// The simulation of `mesh` on the body `shaped`, on the floor of `walk`, put on in its
+/// first pose.
+pub fn garment_on_walk(
+    model: &BodyModel,
+    shaped: &ShapedBody,
+    mesh: &GarmentMesh,
+    walk: &Walk<'_>,
+    settings: SolverSettings,
+) -> Result<GarmentSim> {
+    let mut sim = GarmentSim::new(
+        model,
+        &shaped.positions,
+        &shaped.rest_pose,
+        &sim_garment(mesh),
+        settings,
+    )?;
+    sim.set_floor(Some(walk.floor_y))?;
+    sim.reset(&walk.first)?;
+    Ok(sim)
+}
+
 /// [`sim`] of a garment already meshed on the body `shaped`.
 fn sim_mesh(
     model: &BodyModel,
@@ -195,55 +279,24 @@ fn sim_mesh(
     frames: usize,
     threads: Option<usize>,
 ) -> Result<(SimReport, GarmentSim, Vec<Affine3A>)> {
-    let source = BvhSource::load(motion, Default::default())
-        .with_context(|| format!("cannot load the motion '{}'", motion.display()))?;
-    let floor_y = -source.options().sensor_height_m;
-    let skeleton = fitroom_motion::avatar_skeleton(model, &shaped.rest_pose)?;
-    let mut pipeline = AvatarPipeline::new(&skeleton, floor_y)?;
-    let stream = clean_stream(&source);
-    if stream.is_empty() {
-        bail!("'{}' has no frames", motion.display());
-    }
+    let mut walk = Walk::new(model, shaped, motion)?;
     let mut settings = SolverSettings::default();
     if let Some(t) = threads {
         settings.threads = t.max(1);
     }
     let substeps = settings.substeps;
-    let mut sim = GarmentSim::new(
-        model,
-        &shaped.positions,
-        &shaped.rest_pose,
-        &sim_garment(mesh),
-        settings,
-    )?;
-    sim.set_floor(Some(floor_y))?;
-    let dt_frame = 1.0 / 30.0;
-    let per_frame = (STEP_HZ / 30.0).round() as usize;
-    let mut prev: Option<(Vec<Quat>, Vec<Vec3>)> = None;
+    let mut sim = garment_on_walk(model, shaped, mesh, &walk, settings)?;
     let (mut step_ms, mut frame_ms) = (Vec::new(), Vec::new());
     let (mut max_pen, mut max_strain, mut max_shrink) = (0.0f32, 0.0f32, 0.0f32);
     let mut all_finite = true;
     let mut first_blow_up: Option<String> = None;
     let mut max_tether = 0.0f32;
-    let mut last_skin = Vec::new();
-    for i in 0..frames {
-        let frame = &stream[i % stream.len()];
-        let pose = pipeline.pose(frame, dt_frame);
-        let now = (pose.rotations.clone(), pose.heads.clone());
-        let Some((r0, h0)) = prev.take() else {
-            let skin = skinning_of(&shaped.rest_pose, &now.0, &now.1);
-            sim.reset(&skin)?;
-            last_skin = skin;
-            prev = Some(now);
-            continue;
-        };
+    let mut last_skin = walk.first.clone();
+    for _ in 1..frames {
+        let skins = walk.next_frame();
         let mut this_frame = 0.0;
-        for k in 1..=per_frame {
-            let t = k as f32 / per_frame as f32;
-            let rot: Vec<Quat> = r0.iter().zip(&now.0).map(|(a, b)| a.slerp(*b, t)).collect();
-            let head: Vec<Vec3> = h0.iter().zip(&now.1).map(|(a, b)| a.lerp(*b, t)).collect();
-            let skin = skinning_of(&shaped.rest_pose, &rot, &head);
-            let step = sim.step(&skin, 1.0 / STEP_HZ)?;
+        for skin in &skins {
+            let step = sim.step(skin, 1.0 / STEP_HZ)?;
             step_ms.push(step.solve_ms);
             this_frame += step.solve_ms;
             if first_blow_up.is_none() {
@@ -253,11 +306,12 @@ fn sim_mesh(
             max_pen = max_pen.max(step.max_penetration_m);
             max_shrink = max_shrink.max(step.collider_shrink_m);
             max_strain = max_strain.max(step.max_strain_pct);
-            last_skin = skin;
+        }
+        if let Some(skin) = skins.last() {
+            last_skin.clone_from(skin);
         }
         frame_ms.push(this_frame);
         all_finite &= sim.positions().iter().all(|p| p.is_finite());
-        prev = Some(now);
     }
     let report = SimReport {
         garment: mesh.name.clone(),
@@ -410,6 +464,38 @@ pub struct BenchReport {
 /// The particle count of the speed goal's dress.
 pub const DRESS_PARTICLES: usize = 4_000;
 
+/// The pattern garment `dress` (in its middle size), meshed as its file says to `meshed`
+/// particles, meshed again to about `particles`: the mesh and its edge length, cm.
+fn remesh(
+    body: &BodySurface,
+    dress: &Path,
+    meshed: usize,
+    particles: usize,
+) -> Result<(GarmentMesh, f32)> {
+    // The particle count grows as the inverse square of the edge length (kept within what a
+    // pattern file may ask for).
+    let edge_cm = (Pattern::load(dress)?.target_edge_cm
+        * (meshed as f32 / particles as f32).sqrt())
+    .clamp(0.5, 20.0);
+    let mesh = mesh_garment(body, dress, None, Some(edge_cm)).with_context(|| {
+        format!(
+            "cannot mesh '{}' again at {edge_cm:.2} cm edges for the {particles}-particle bench",
+            dress.display()
+        )
+    })?;
+    Ok((mesh, edge_cm))
+}
+
+/// The goal's dress: the pattern garment `dress` meshed to about [`DRESS_PARTICLES`]
+/// particles (as `fitroom cloth bench` does) on the default body, which it returns too.
+pub fn dress_4k(model: &BodyModel, dress: &Path) -> Result<(ShapedBody, GarmentMesh)> {
+    let shaped = model.shaped(&Shape::default())?;
+    let body = BodySurface::new(model, &shaped)?;
+    let base = mesh_garment(&body, dress, None, None)?;
+    let (mesh, _) = remesh(&body, dress, base.positions.len(), DRESS_PARTICLES)?;
+    Ok((shaped, mesh))
+}
+
 /// `fitroom cloth bench`.
 pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> Result<BenchReport> {
     let shaped = model.shaped(&Shape::default())?;
@@ -420,18 +506,7 @@ pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> R
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
     let (dress_4k, edge_cm) = if pattern {
-        // The particle count grows as the inverse square of the edge length (kept within
-        // what a pattern file may ask for).
-        let edge_cm = (Pattern::load(dress)?.target_edge_cm
-            * (report.particles as f32 / DRESS_PARTICLES as f32).sqrt())
-        .clamp(0.5, 20.0);
-        let fine = mesh_garment(&body, dress, None, Some(edge_cm))
-            .with_context(|| {
-                format!(
-                    "cannot mesh '{}' again at {edge_cm:.2} cm edges for the {DRESS_PARTICLES}-particle bench",
-                    dress.display()
-                )
-            })?;
+        let (fine, edge_cm) = remesh(&body, dress, report.particles, DRESS_PARTICLES)?;
         let (fine, _, _) = sim_mesh(model, &shaped, &fine, motion, frames, None)?;
         (Some(fine), Some(edge_cm))
     } else {
