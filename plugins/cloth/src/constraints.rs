@@ -1181,30 +1181,54 @@ unsafe fn bend_kernel<L: Lanes, const MODE: u8, const PAIRS: u8>(a: BendArgs<'_,
 /// writes those particles in this phase.
 #[inline]
 pub(crate) unsafe fn max_stretch_squared(
+    isa: Isa,
+    batches: &[CheckBatch],
+    first_batch: usize,
+    x: *const Vec3A,
+) -> (f32, u32) {
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx")]
+    unsafe fn avx(batches: &[CheckBatch], first_batch: usize, x: *const Vec3A) -> (f32, u32) {
+        // SAFETY: the caller's contract.
+        unsafe { max_stretch_squared_with::<Avx8>(batches, first_batch, x) }
+    }
+    // SAFETY: the caller's contract; AVX only where detected.
+    unsafe {
+        match isa {
+            #[cfg(target_arch = "x86_64")]
+            Isa::Avx => avx(batches, first_batch, x),
+            _ => max_stretch_squared_with::<Baseline8>(batches, first_batch, x),
+        }
+    }
+}
+
+#[inline(always)]
+unsafe fn max_stretch_squared_with<L: Lanes>(
     batches: &[CheckBatch],
     first_batch: usize,
     x: *const Vec3A,
 ) -> (f32, u32) {
     let mut worst = (0.0f32, u32::MAX);
     for (k, c) in batches.iter().enumerate() {
-        // SAFETY: see the function's contract.
-        let (pi, pj) = unsafe { (Baseline8::gather(x, &c.i), Baseline8::gather(x, &c.j)) };
+        // SAFETY: see `max_stretch_squared`.
+        let (pi, pj) = unsafe { (L::gather(x, &c.i), L::gather(x, &c.j)) };
         let d = pi - pj;
-        let rest = Baseline8::load(&c.rest);
+        let rest = L::load(&c.rest);
         let ratio2 = d.dot(d).div(rest * rest);
-        let lane_id = |lane: u32| ((first_batch + k) * LANES) as u32 + lane;
+        // (No closure: it would not inherit the caller's target features.)
+        let lane_base = ((first_batch + k) * LANES) as u32;
         let nan = ratio2.is_nan().bits();
         if nan != 0 {
-            return (f32::NAN, lane_id(nan.trailing_zeros()));
+            return (f32::NAN, lane_base + nan.trailing_zeros());
         }
-        let mut above = ratio2.gt(Baseline8::splat(worst.0)).bits();
+        let mut above = ratio2.gt(L::splat(worst.0)).bits();
         if above != 0 {
             let r = ratio2.to_array();
             while above != 0 {
                 let lane = above.trailing_zeros();
                 above &= above - 1;
                 if r[lane as usize] > worst.0 {
-                    worst = (r[lane as usize], lane_id(lane));
+                    worst = (r[lane as usize], lane_base + lane);
                 }
             }
         }
@@ -1388,6 +1412,70 @@ mod tests {
             for b in &set.bend[run.batches.0 as usize..run.batches.1 as usize] {
                 let curved = b.rest.iter().flatten().any(|&r| r != 0.0);
                 assert_eq!(curved, is_curved(run.kind));
+            }
+        }
+    }
+
+    /// The stretch check on both instruction sets against a plain loop over the pairs: the
+    /// same largest ratio and lane, and the first NaN.
+    #[test]
+    fn stretch_check_finds_the_largest_ratio_and_the_first_nan() {
+        let n = 200u32;
+        let mut seed = 12345u32;
+        let mut next = || {
+            seed = seed.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32
+        };
+        let mut x: Vec<Vec3A> = (0..n).map(|_| Vec3A::new(next(), next(), next())).collect();
+        let batches: Vec<CheckBatch> = (0..37)
+            .map(|_| {
+                let mut pick = || ((next() * n as f32) as u32).min(n - 1);
+                let (i, j): (Vec<u32>, Vec<u32>) = (0..LANES).map(|_| (pick(), pick())).unzip();
+                CheckBatch {
+                    i: std::array::from_fn(|l| offset(i[l])),
+                    j: std::array::from_fn(|l| offset(j[l])),
+                    rest: std::array::from_fn(|_| 0.05 + next()),
+                }
+            })
+            .collect();
+        let plain = |x: &[Vec3A], first: usize| {
+            let mut worst = (0.0f32, u32::MAX);
+            for (k, c) in batches.iter().enumerate() {
+                for l in 0..LANES {
+                    let (i, j) = (c.i[l] as usize / 16, c.j[l] as usize / 16);
+                    let ratio2 = (x[i] - x[j]).length_squared() / (c.rest[l] * c.rest[l]);
+                    let lane = ((first + k) * LANES + l) as u32;
+                    if ratio2.is_nan() {
+                        return (f32::NAN, lane);
+                    }
+                    if ratio2 > worst.0 {
+                        worst = (ratio2, lane);
+                    }
+                }
+            }
+            worst
+        };
+        let mut isas = vec![Isa::Baseline];
+        if Isa::detect() != Isa::Baseline {
+            isas.push(Isa::detect());
+        }
+        for nan in [false, true] {
+            if nan {
+                let c = &batches[20];
+                x[c.j[5] as usize / 16].y = f32::NAN;
+            }
+            let expected = plain(&x, 3);
+            assert_eq!(expected.0.is_nan(), nan);
+            for &isa in &isas {
+                // SAFETY: every index is a particle of `x`, which nothing writes.
+                let got = unsafe { max_stretch_squared(isa, &batches, 3, x.as_ptr()) };
+                assert_eq!(got.1, expected.1, "{isa:?}, NaN {nan}");
+                assert!(
+                    got.0.to_bits() == expected.0.to_bits() || (nan && got.0.is_nan()),
+                    "{isa:?}: {} against {}",
+                    got.0,
+                    expected.0
+                );
             }
         }
     }

@@ -1585,6 +1585,7 @@ impl StepContext<'_> {
         // SAFETY: positions are only read in this phase; slot `item` belongs to this item.
         unsafe {
             let worst = max_stretch_squared(
+                self.k.isa,
                 &c.check[d0 as usize..d1 as usize],
                 d0 as usize,
                 self.xs.as_ptr(),
