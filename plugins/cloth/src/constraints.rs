@@ -1186,20 +1186,14 @@ pub(crate) unsafe fn max_stretch_squared(
     first_batch: usize,
     x: *const Vec3A,
 ) -> (f32, u32) {
-    #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx")]
-    unsafe fn avx(batches: &[CheckBatch], first_batch: usize, x: *const Vec3A) -> (f32, u32) {
-        // SAFETY: the caller's contract.
-        unsafe { max_stretch_squared_with::<Avx8>(batches, first_batch, x) }
-    }
-    // SAFETY: the caller's contract; AVX only where detected.
-    unsafe {
-        match isa {
-            #[cfg(target_arch = "x86_64")]
-            Isa::Avx => avx(batches, first_batch, x),
-            _ => max_stretch_squared_with::<Baseline8>(batches, first_batch, x),
-        }
-    }
+    dispatch_lanes!(
+        isa,
+        max_stretch_squared_with(
+            batches: &[CheckBatch],
+            first_batch: usize,
+            x: *const Vec3A,
+        ) -> (f32, u32)
+    )
 }
 
 #[inline(always)]
