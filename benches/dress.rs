@@ -73,6 +73,7 @@ fn bench_dress(c: &mut Criterion) {
             })
         });
         assert_eq!(sim.resets(), 0, "the dress blew up in the bench");
+        assert_eq!(sim.teleports(), 0, "the body jumped in the bench");
     }
     group.finish();
 

@@ -172,7 +172,8 @@ pub struct SimReport {
     pub all_finite: bool,
 }
 
-/// `fitroom cloth sim`.
+/// `fitroom cloth sim`: the garment put on the body at the clip's first frame, then stepped
+/// through the next `frames - 1` frames (with `frames` 0 or 1 only put on).
 pub fn sim(
     model: &BodyModel,
     shape: &Shape,
