@@ -601,19 +601,14 @@ impl ConstraintSet {
             .iter()
             .flat_map(move |run| {
                 let (a, b) = (run.batches.0 as usize, run.batches.1 as usize);
-                let offsets: Box<dyn Iterator<Item = u32> + '_> = match run.kind {
-                    RunKind::Distance => Box::new(
-                        self.distance[a..b]
-                            .iter()
-                            .flat_map(|batch| batch.i.into_iter().chain(batch.j)),
-                    ),
-                    RunKind::Bend { .. } => Box::new(
-                        self.bend[a..b]
-                            .iter()
-                            .flat_map(|batch| batch.v.into_iter().flatten()),
-                    ),
+                let (distance, bend) = match run.kind {
+                    RunKind::Distance => (&self.distance[a..b], &[][..]),
+                    RunKind::Bend { .. } => (&[][..], &self.bend[a..b]),
                 };
-                offsets
+                let distance = distance
+                    .iter()
+                    .flat_map(|batch| batch.i.into_iter().chain(batch.j));
+                distance.chain(bend.iter().flat_map(|batch| batch.v.into_iter().flatten()))
             })
             .map(|o| o / offset(1))
     }
@@ -1244,25 +1239,10 @@ mod tests {
         (set, order)
     }
 
-    fn item_particles(set: &ConstraintSet, item: &ConstraintItem) -> Vec<u32> {
-        let mut v = Vec::new();
-        for run in &set.runs[item.runs.0 as usize..item.runs.1 as usize] {
-            let (a, b) = (run.batches.0 as usize, run.batches.1 as usize);
-            match run.kind {
-                RunKind::Distance => v.extend(
-                    set.distance[a..b]
-                        .iter()
-                        .flat_map(|c| c.i.into_iter().chain(c.j)),
-                ),
-                _ => v.extend(
-                    set.bend[a..b]
-                        .iter()
-                        .flat_map(|c| c.v.into_iter().flatten()),
-                ),
-            }
-        }
-        v.retain(|&v| v != offset(item.padding));
-        v.iter().map(|o| o / 16).collect()
+    /// The particles item `k`'s constraints touch, without its padding particle.
+    fn item_particles(set: &ConstraintSet, k: usize) -> Vec<u32> {
+        let padding = set.items[k].padding;
+        set.item_particles(k).filter(|&v| v != padding).collect()
     }
 
     #[test]
@@ -1306,8 +1286,7 @@ mod tests {
         for (a, b) in phases {
             let mut owner = vec![u32::MAX; n];
             for k in a..b {
-                let item = &set.items[k as usize];
-                for v in item_particles(&set, item) {
+                for v in item_particles(&set, k as usize) {
                     assert!(
                         owner[v as usize] == u32::MAX || owner[v as usize] == k,
                         "items {k} and {} share particle {v}",
@@ -1320,7 +1299,7 @@ mod tests {
         // Block items touch only their block's particles.
         for k in 0..order.blocks() {
             let range = order.block_start[k]..order.block_start[k + 1];
-            for v in item_particles(&set, &set.items[k]) {
+            for v in item_particles(&set, k) {
                 assert!(range.contains(&v), "block {k} touches particle {v}");
             }
         }

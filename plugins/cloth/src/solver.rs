@@ -403,18 +403,24 @@ impl SeparatorReach {
     }
 }
 
-/// The particle group (`PARTICLE_GROUPS` per block, each a run of the block's chunks, as
-/// `StepContext::group_particles` splits them) that holds particle `i`.
-fn group_of(order: &ParticleOrder, i: u32) -> u32 {
-    let block = order.block_of(i) as usize;
-    let chunk = order.chunk_start.partition_point(|&s| s <= i) - 1;
+/// The chunks of particle group `group`: `PARTICLE_GROUPS` per block, each a run of the
+/// block's chunks (what [`StepContext::group_particles`] steps).
+fn group_chunks(order: &ParticleOrder, group: usize) -> std::ops::Range<usize> {
+    let (block, part) = (group / PARTICLE_GROUPS, group % PARTICLE_GROUPS);
     let (first, end) = (
         order.block_chunks[block] as usize,
         order.block_chunks[block + 1] as usize,
     );
     let count = end - first;
+    first + part * count / PARTICLE_GROUPS..first + (part + 1) * count / PARTICLE_GROUPS
+}
+
+/// The particle group (see [`group_chunks`]) that holds particle `i`.
+fn group_of(order: &ParticleOrder, i: u32) -> u32 {
+    let block = order.block_of(i) as usize;
+    let chunk = order.chunk_start.partition_point(|&s| s <= i) - 1;
     let part = (0..PARTICLE_GROUPS)
-        .find(|&p| chunk < first + (p + 1) * count / PARTICLE_GROUPS)
+        .find(|&p| group_chunks(order, block * PARTICLE_GROUPS + p).contains(&chunk))
         .unwrap_or(PARTICLE_GROUPS - 1);
     (block * PARTICLE_GROUPS + part) as u32
 }
@@ -1605,16 +1611,7 @@ impl StepContext<'_> {
     /// forces.
     fn group_particles(&self, sub: u32, group: usize) {
         let o = &self.model.order;
-        let block = group / PARTICLE_GROUPS;
-        let part = group % PARTICLE_GROUPS;
-        let (first, end) = (
-            o.block_chunks[block] as usize,
-            o.block_chunks[block + 1] as usize,
-        );
-        let count = end - first;
-        let chunks =
-            first + part * count / PARTICLE_GROUPS..first + (part + 1) * count / PARTICLE_GROUPS;
-        for c in chunks {
+        for c in group_chunks(o, group) {
             let range = o.chunk_start[c] as usize..o.chunk_start[c + 1] as usize;
             if sub == 0 {
                 self.load(range.clone());
