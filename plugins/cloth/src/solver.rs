@@ -63,7 +63,7 @@
 //! this costs at most two slow steps in 120; a lone stall (a virtual machine's processor taken
 //! away for a moment) costs only itself.
 
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 
 use glam::{Vec3, Vec3A};
 
@@ -558,6 +558,8 @@ pub struct ClothSolver {
     pool: WorkerPool,
     /// Steps left to run on the caller's thread alone (see `SOLO_STEPS`).
     solo_steps: u32,
+    /// [`Self::prewake`] was called since the last step (the step need not wake them again).
+    prewoken: AtomicBool,
     /// Steps since the last stalled one (see `SOLO_STEPS`).
     since_stall: u32,
     isa: Isa,
@@ -755,6 +757,7 @@ impl ClothSolver {
             time: 0.0,
             pool: WorkerPool::new(settings.threads),
             solo_steps: 0,
+            prewoken: AtomicBool::new(false),
             since_stall: u32::MAX,
             isa: Isa::detect(),
             #[cfg(test)]
@@ -1090,7 +1093,7 @@ impl ClothSolver {
     /// (posing colliders, skinning attachment targets) can call this first, so that the
     /// wake-up overlaps that work. It changes no result.
     pub fn prewake(&self) {
-        if self.solo_steps == 0 {
+        if self.solo_steps == 0 && !self.prewoken.swap(true, Ordering::Relaxed) {
             self.pool.prewake();
         }
     }
@@ -1099,6 +1102,7 @@ impl ClothSolver {
     pub fn step(&mut self, dt: f32) -> Result<StepReport, ClothError> {
         positive("time step (s)", dt)?;
         self.prewake();
+        self.prewoken.store(false, Ordering::Relaxed);
         let settings = self.model.settings;
         let substeps = settings.substeps;
         let h = dt / substeps as f32;
