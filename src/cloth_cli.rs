@@ -294,7 +294,7 @@ fn sim_mesh(
     let mut max_tether = 0.0f32;
     let mut last_skin = walk.first.clone();
     for _ in 1..frames {
-        let skins = walk.next_frame();
+        let mut skins = walk.next_frame();
         let mut this_frame = 0.0;
         for skin in &skins {
             let step = sim.step(skin, 1.0 / STEP_HZ)?;
@@ -308,8 +308,8 @@ fn sim_mesh(
             max_shrink = max_shrink.max(step.collider_shrink_m);
             max_strain = max_strain.max(step.max_strain_pct);
         }
-        if let Some(skin) = skins.last() {
-            last_skin.clone_from(skin);
+        if let Some(skin) = skins.pop() {
+            last_skin = skin;
         }
         frame_ms.push(this_frame);
         all_finite &= sim.positions().iter().all(|p| p.is_finite());
@@ -490,18 +490,25 @@ fn remesh(
 /// The goal's dress: the pattern garment `dress` meshed to about [`DRESS_PARTICLES`]
 /// particles (as `fitroom cloth bench` does) on the default body, which it returns too.
 pub fn dress_4k(model: &BodyModel, dress: &Path) -> Result<(ShapedBody, GarmentMesh)> {
-    let shaped = model.shaped(&Shape::default())?;
-    let body = BodySurface::new(model, &shaped)?;
-    let base = mesh_garment(&body, dress, None, None)?;
+    let (shaped, body, base) = dress_on_default_body(model, dress)?;
     let (mesh, _) = remesh(&body, dress, base.positions.len(), DRESS_PARTICLES)?;
     Ok((shaped, mesh))
 }
 
-/// `fitroom cloth bench`.
-pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> Result<BenchReport> {
+/// The default body, its surface, and `dress` (middle size, as its file meshes it) on it.
+fn dress_on_default_body(
+    model: &BodyModel,
+    dress: &Path,
+) -> Result<(ShapedBody, BodySurface, GarmentMesh)> {
     let shaped = model.shaped(&Shape::default())?;
     let body = BodySurface::new(model, &shaped)?;
     let mesh = mesh_garment(&body, dress, None, None)?;
+    Ok((shaped, body, mesh))
+}
+
+/// `fitroom cloth bench`.
+pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> Result<BenchReport> {
+    let (shaped, body, mesh) = dress_on_default_body(model, dress)?;
     let (report, _, _) = sim_mesh(model, &shaped, &mesh, motion, frames, None)?;
     let pattern = dress
         .extension()
