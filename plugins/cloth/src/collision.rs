@@ -56,11 +56,15 @@
 //! with it. Twist of a capsule about its own axis is not known (spheres carry no orientation)
 //! and so does not drag the cloth.
 //!
+//! The test is written once, for eight particles in SIMD lanes ([`SweptCollider::collide_lanes`]):
+//! the solver collides eight neighbouring particles together, and one particle alone runs the
+//! same code in the baseline lanes ([`SweptCollider::collide`]), so both give the same bits.
+//!
 //! Self-collision is **not** implemented.
 
 use glam::{Mat3A, Quat, Vec3, Vec3A};
 
-use crate::simd::{Lanes, V3};
+use crate::simd::{Baseline8, Lanes, V3};
 
 /// How deep (metres) a particle may be inside a collider's (or plane's) skin without being moved: a
 /// particle that a collider has just put on its skin is found there again by the next
@@ -71,12 +75,6 @@ use crate::simd::{Lanes, V3};
 /// colliders, which found nothing to do; with a micrometre's tolerance (a three-thousandth of
 /// the 3 mm skin) none did, and the step took 9 % less time.
 pub(crate) const CONTACT_TOLERANCE: f32 = 1e-6;
-
-/// Headroom (metres) of the eight-particle screen ([`SweptCollider::candidates`]): it keeps a
-/// lane whose path clears a collider by less than this, although it computes the clearance
-/// with the one-particle test's operations in the same order (the same bits with glam's SSE2
-/// vectors), so that another order of additions (another glam backend) cannot drop a lane.
-const SCREEN_MARGIN: f32 = 1e-4;
 
 /// The most colliders (capsules plus lone spheres) one cloth collides with.
 pub const MAX_COLLIDERS: usize = 1024;
@@ -238,28 +236,36 @@ impl Shape {
         }
     }
 
-    /// [`Self::distance_normal`]'s distance for eight points at once (relative to `origin`);
-    /// it may differ from it by rounding.
+    /// [`Self::distance_normal`] for eight points at once (relative to `origin`); it may
+    /// differ from it by rounding. [`SweptCollider::collide`] and
+    /// [`SweptCollider::collide_lanes`] use this one, so that one particle and eight give the
+    /// same bits.
     #[inline(always)]
-    fn distance_lanes<L: Lanes>(&self, p: V3<L>) -> L {
-        let ra = L::splat(self.ra);
-        let to_a = p.dot(p).sqrt() - ra;
+    fn distance_normal_lanes<L: Lanes>(&self, p: V3<L>) -> (L, V3<L>) {
+        let (tiny, one) = (L::splat(1e-12), L::splat(1.0));
         if self.sphere {
-            return to_a;
+            let d = p.dot(p).sqrt();
+            let n = V3::select(d.gt(tiny), p.scale(one.div(d)), V3::splat(Vec3A::Y));
+            return (d - L::splat(self.ra), n);
         }
         let axis = V3::splat(self.axis);
         let x = p.dot(axis);
         let radial = p - axis.scale(x);
         let y = radial.dot(radial).sqrt();
+        let rhat = V3::select(y.gt(tiny), radial.scale(one.div(y)), V3::splat(self.perp));
         let (sin, cos) = (L::splat(self.sin), L::splat(self.cos));
         let u = x * cos - y * sin;
-        let q = p - axis.scale(L::splat(self.len));
-        let to_b = q.dot(q).sqrt() - L::splat(self.rb);
-        let side = x * sin + y * cos - ra;
-        L::select(
-            L::splat(0.0).gt(u),
-            to_a,
-            L::select(u.gt(L::splat(self.side)), to_b, side),
+        // Nearest to the first sphere (u < 0), to the second (u > side), else to the side.
+        let at_a = L::splat(0.0).gt(u);
+        let at_sphere = at_a.or(u.gt(L::splat(self.side)));
+        let v = V3::select(at_a, p, p - axis.scale(L::splat(self.len)));
+        let dv = v.dot(v).sqrt();
+        let along = V3::select(at_a, V3::splat(-self.axis), axis);
+        let nv = V3::select(dv.gt(tiny), v.scale(one.div(dv)), along);
+        let r = L::select(at_a, L::splat(self.ra), L::splat(self.rb));
+        (
+            L::select(at_sphere, dv - r, x * sin + y * cos - L::splat(self.ra)),
+            V3::select(at_sphere, nv, axis.scale(sin) + rhat.scale(cos)),
         )
     }
 
@@ -324,42 +330,43 @@ impl SweptCollider {
         self.bounds_min.cmple(p).all() && p.cmple(self.bounds_max).all()
     }
 
-    /// Screens eight particles, each moving from `start` (at the substep start) to `now`, whose
-    /// paths began the pass inside the box from `start` to `first` (`first`: their positions at
-    /// the start of the collision pass, as [`Self::overlaps`] sees them): returns the lanes
-    /// (bit `l` for lane `l`) that [`Self::collide`] may move. Every other lane it leaves
-    /// unchanged, so only the returned ones need the one-particle test: a lane is left out only
-    /// if its path's box misses this collider's or if its path clears the collider by more than
-    /// the rounding margin. The lanes must be finite.
+    /// [`Self::overlaps`] for eight particles: the lanes whose box from `start` to `first`
+    /// meets this collider's box. The lanes must be finite.
     #[inline(always)]
-    pub fn candidates<L: Lanes>(
-        &self,
-        start: V3<L>,
-        first: V3<L>,
-        now: V3<L>,
-        thickness: f32,
-    ) -> u32 {
-        // The box of start..first meets the collider's box (min/max of two finite values
-        // compared with a bound: either one compared). (No closures: they would not inherit
-        // the caller's target features.)
+    pub fn overlaps_lanes<L: Lanes>(&self, start: V3<L>, first: V3<L>) -> L {
+        // The min/max of two finite values compared with a bound: either one compared. (No
+        // closures: they would not inherit the caller's target features.)
         let (lo, hi) = (
             V3::<L>::splat(self.bounds_min),
             V3::<L>::splat(self.bounds_max),
         );
-        let overlap =
-            lo.x.le(start.x)
-                .or(lo.x.le(first.x))
-                .and(lo.y.le(start.y).or(lo.y.le(first.y)))
-                .and(lo.z.le(start.z).or(lo.z.le(first.z)))
-                .and(start.x.le(hi.x).or(first.x.le(hi.x)))
-                .and(start.y.le(hi.y).or(first.y.le(hi.y)))
-                .and(start.z.le(hi.z).or(first.z.le(hi.z)));
-        if overlap.bits() == 0 {
-            return 0;
-        }
-        // As in `collide`: untouched when the distance at the end exceeds the relative travel.
-        let l1 = now - V3::splat(self.end.origin);
-        let s1 = self.end.distance_lanes(l1) - L::splat(thickness);
+        lo.x.le(start.x)
+            .or(lo.x.le(first.x))
+            .and(lo.y.le(start.y).or(lo.y.le(first.y)))
+            .and(lo.z.le(start.z).or(lo.z.le(first.z)))
+            .and(start.x.le(hi.x).or(first.x.le(hi.x)))
+            .and(start.y.le(hi.y).or(first.y.le(hi.y)))
+            .and(start.z.le(hi.z).or(first.z.le(hi.z)))
+    }
+
+    /// Continuous collision of eight particles, each moving from `start` (at the substep
+    /// start) to `now`, of which only the lanes set in `lanes` are tested: the corrected
+    /// positions (the others unchanged) and the lanes moved. One lane gives what
+    /// [`Self::collide`] gives for it, bit for bit (it runs this code).
+    #[inline(always)]
+    pub fn collide_lanes<L: Lanes>(
+        &self,
+        start: V3<L>,
+        now: V3<L>,
+        lanes: L,
+        thickness: f32,
+        friction: f32,
+    ) -> (V3<L>, L) {
+        let origin = V3::splat(self.end.origin);
+        let l1 = now - origin;
+        let (d1, n1) = self.end.distance_normal_lanes(l1);
+        let skin = L::splat(thickness);
+        let s1 = d1 - skin;
         let d = start - V3::splat(self.start_origin);
         let r = &self.rotation;
         let l0 = V3::splat(r.x_axis).scale(d.x)
@@ -367,10 +374,48 @@ impl SweptCollider {
             + V3::splat(r.z_axis).scale(d.z);
         let path = l1 - l0;
         let travel = path.dot(path).sqrt();
-        (s1 - travel)
-            .not_gt(L::splat(SCREEN_MARGIN))
-            .and(overlap)
-            .bits()
+        // Every point of the relative path is at least s1 - travel ≥ 0 away.
+        let mut hit = lanes.and_not(travel.le(s1));
+        if hit.bits() == 0 {
+            return (now, hit);
+        }
+        let (d0, n0) = self.end.distance_normal_lanes(l0);
+        let s0 = d0 - skin;
+        let (zero, tolerance) = (L::splat(0.0), L::splat(CONTACT_TOLERANCE));
+        // "Outside" at the start means outside the bare shape: within the skin the nearest
+        // surface point is still on the particle's side. Started outside: clip against the
+        // tangent plane at the nearest point to l0 (untouched if the path cannot have crossed
+        // the shape, or ends on the plane's near side).
+        let outside = zero.le(d0);
+        let depth_out = -path.dot(n0) - s0;
+        let projected_out = l1 + n0.scale(depth_out);
+        let across = projected_out - l0;
+        let tangential_out = across - n0.scale(across.dot(n0));
+        let clear_out = zero
+            .le(s1)
+            .and(travel.le(s0 + s1))
+            .or(depth_out.le(tolerance));
+        // Started inside: push to the nearest surface (untouched if it ends on the skin).
+        let clear_in = (-tolerance).le(s1);
+        let projected_in = l1 - n1.scale(s1);
+        let tangential_in = path - n1.scale(path.dot(n1));
+        hit = hit.and_not(L::select(outside, clear_out, clear_in));
+        if hit.bits() == 0 {
+            return (now, hit);
+        }
+        let projected = V3::select(outside, projected_out, projected_in);
+        let tangential = V3::select(outside, tangential_out, tangential_in);
+        let depth = L::select(outside, depth_out, -s1);
+        // Friction: static below μ·depth, else the tangential motion shortened by μ·depth.
+        let t = tangential.dot(tangential).sqrt();
+        let limit = L::splat(friction) * depth;
+        let kinetic = V3::select(
+            t.gt(zero),
+            projected - tangential.scale(limit.div(t)),
+            projected,
+        );
+        let corrected = V3::select(t.le(limit), projected - tangential, kinetic);
+        (V3::select(hit, corrected + origin, now), hit)
     }
 
     /// Continuous collision of one particle moving from `start` (at the substep start) to
@@ -383,53 +428,16 @@ impl SweptCollider {
         thickness: f32,
         friction: f32,
     ) -> (Vec3A, bool) {
-        let l1 = now - self.end.origin;
-        let (d1, n1) = self.end.distance_normal(l1);
-        let s1 = d1 - thickness;
-        let l0 = self.rotation * (start - self.start_origin);
-        let travel = (l1 - l0).length();
-        if s1 >= travel {
-            // Every point of the relative path is at least s1 - travel ≥ 0 away.
-            return (now, false);
-        }
-        let (d0, n0) = self.end.distance_normal(l0);
-        let s0 = d0 - thickness;
-        // "Outside" at the start means outside the bare shape: within the skin the nearest
-        // surface point is still on the particle's side.
-        let contact = if d0 >= 0.0 {
-            // Started outside: clip against the tangent plane at the nearest point to l0.
-            if s1 >= 0.0 && travel <= s0 + s1 {
-                return (now, false);
-            }
-            let depth = -(l1 - l0).dot(n0) - s0;
-            if depth <= CONTACT_TOLERANCE {
-                return (now, false);
-            }
-            let projected = l1 + depth * n0;
-            let tangential = projected - l0;
-            let tangential = tangential - tangential.dot(n0) * n0;
-            (projected, tangential, depth)
-        } else {
-            // Started inside: push to the nearest surface.
-            if s1 >= -CONTACT_TOLERANCE {
-                return (now, false);
-            }
-            let projected = l1 - s1 * n1;
-            let motion = l1 - l0;
-            let tangential = motion - motion.dot(n1) * n1;
-            (projected, tangential, -s1)
-        };
-        let (projected, tangential, depth) = contact;
-        let t = tangential.length();
-        let limit = friction * depth;
-        let corrected = if t <= limit {
-            projected - tangential
-        } else if t > 0.0 {
-            projected - tangential * (limit / t)
-        } else {
-            projected
-        };
-        (corrected + self.end.origin, true)
+        let all = Baseline8::splat(0.0).le(Baseline8::splat(0.0));
+        let (q, hit) = self.collide_lanes(
+            V3::<Baseline8>::splat(start),
+            V3::splat(now),
+            all,
+            thickness,
+            friction,
+        );
+        let [x, y, z] = q.to_arrays();
+        (Vec3A::new(x[0], y[0], z[0]), hit.bits() & 1 != 0)
     }
 
     /// Distance from `p` to the skin surface (negative inside) and the outward normal.

@@ -483,8 +483,8 @@ struct StepConstants {
     max_velocity: f32,
     frame: Option<FrameTerms>,
     colliders: usize,
-    /// Whether eight particles at a time are screened against each collider (always, except in
-    /// the test that compares the two paths).
+    /// Whether eight particles at a time are collided together (always, except in the test
+    /// that compares the two paths).
     #[cfg(test)]
     group_collisions: bool,
     /// Whether the second collision pass tests only the shapes before the last mover (always,
@@ -1968,36 +1968,62 @@ impl StepContext<'_> {
             shapes,
         };
         #[cfg(test)]
-        let screen = k.group_collisions;
+        let together = k.group_collisions;
         #[cfg(not(test))]
-        let screen = true;
-        let group = screen && near.is_none_or(|n| !n.is_empty());
+        let together = true;
+        let group = together && near.is_none_or(|n| !n.is_empty());
+        // Without a plane near, the pass after the first is made on the eight particles
+        // together too (see `collide8`).
+        let second = !scene.any_plane && scene.shapes >= 2;
+        let mut pass = GroupPass {
+            p: [Vec3A::ZERO; LANES],
+            last: [0; LANES],
+        };
         let mut i = range.start;
         while i < range.end {
-            // Eight free particles: screened against each collider together, so that only
-            // the particles a collider may move take the one-particle test.
+            // Eight free particles: collided together, each collider with the lanes its box
+            // meets; only what the eight-particle passes leave open is done one by one.
             let eight =
                 i + LANES <= range.end && m.inverse_mass[i..i + LANES].iter().all(|&w| w > 0.0);
             if group && eight {
                 // SAFETY: particles `i..i + 8` belong to this item.
-                match unsafe { self.collide_group(i, &scene) } {
-                    Some(GroupPass {
-                        start,
-                        p,
-                        moved,
-                        last,
-                    }) => {
-                        // A particle no collider moved is done unless a plane is near (its
-                        // position is unchanged, and its first pass found nothing to repeat).
-                        let mut rest = if scene.any_plane { ALL_LANES } else { moved };
+                match unsafe { self.collide_group(i, &scene, second, &mut pass) } {
+                    Some((moved, again)) if scene.any_plane => {
+                        // The planes (and every pass after the first) one by one.
+                        for l in 0..LANES {
+                            let last = (moved & (1 << l) != 0).then_some(pass.last[l]);
+                            // SAFETY: as above.
+                            unsafe {
+                                let start = self.xs_prev.get(i + l);
+                                let resume = Resume::AfterColliders(last);
+                                self.collide_particle(i + l, sub, start, pass.p[l], resume, &scene);
+                            }
+                        }
+                        debug_assert_eq!(again, 0);
+                    }
+                    Some((moved, again)) => {
+                        // A particle no collider moved is done (its position is unchanged).
+                        let mut rest = moved;
                         while rest != 0 {
                             let l = rest.trailing_zeros() as usize;
                             rest &= rest - 1;
-                            let first = Some((moved & (1 << l) != 0).then_some(last[l]));
                             // SAFETY: as above.
                             unsafe {
-                                self.collide_particle(i + l, sub, start[l], p[l], first, &scene)
-                            };
+                                let start = self.xs_prev.get(i + l);
+                                if again & (1 << l) != 0 {
+                                    let resume = Resume::ThirdPass;
+                                    self.collide_particle(
+                                        i + l,
+                                        sub,
+                                        start,
+                                        pass.p[l],
+                                        resume,
+                                        &scene,
+                                    );
+                                } else {
+                                    self.settle(i + l, sub, start, pass.p[l], colliders);
+                                }
+                            }
                         }
                     }
                     // A position that is not finite: each particle on its own.
@@ -2006,7 +2032,7 @@ impl StepContext<'_> {
                             // SAFETY: as above.
                             unsafe {
                                 let (start, p) = (self.xs_prev.get(i), self.xs.get(i));
-                                self.collide_particle(i, sub, start, p, None, &scene);
+                                self.collide_particle(i, sub, start, p, Resume::Fresh, &scene);
                             }
                         }
                     }
@@ -2018,48 +2044,72 @@ impl StepContext<'_> {
                 // SAFETY: particle `i` belongs to this item.
                 unsafe {
                     let (start, p) = (self.xs_prev.get(i), self.xs.get(i));
-                    self.collide_particle(i, sub, start, p, None, &scene);
+                    self.collide_particle(i, sub, start, p, Resume::Fresh, &scene);
                 }
             }
             i += 1;
         }
     }
 
-    /// The first collision pass over the colliders (not the planes) for the eight particles
-    /// from `i`: their start positions, their positions after the pass, the lanes it moved and
-    /// per lane the place in the scene's order of the last collider that moved it. `None` if
-    /// a position is not finite (the one-particle path handles it).
+    /// The collision passes over the colliders (not the planes) that the eight particles
+    /// from `i` make together ([`collide8`]; the second only if `second`), into `pass`: the
+    /// lanes moved, and those the second pass moved (they need a third, one by one). `None`
+    /// if a position is not finite (the one-particle path handles it).
     ///
     /// # Safety
     /// Particles `i..i + 8` belong to the calling item.
-    unsafe fn collide_group(&self, i: usize, scene: &Scene<'_>) -> Option<GroupPass> {
+    unsafe fn collide_group(
+        &self,
+        i: usize,
+        scene: &Scene<'_>,
+        second: bool,
+        pass: &mut GroupPass,
+    ) -> Option<(u32, u32)> {
         let k = &self.k;
-        let mut start = [Vec3A::ZERO; LANES];
-        let mut p = [Vec3A::ZERO; LANES];
-        let mut last = [0u16; LANES];
+        #[cfg(test)]
+        let prune = k.prune_passes;
+        #[cfg(not(test))]
+        let prune = true;
         // SAFETY: the caller's contract.
-        let moved = unsafe {
+        unsafe {
             collide8(
                 k.isa,
                 self.xs_prev.as_ptr().add(i),
                 self.xs.as_ptr().add(i),
                 scene,
                 (k.thickness, k.friction),
-                (&mut start, &mut p, &mut last),
+                (second, prune),
+                pass,
             )
-        }?;
-        Some(GroupPass {
-            start,
-            p,
-            moved,
-            last,
-        })
+        }
+    }
+
+    /// Stores particle `i`'s position `p` after a collider moved it (from `start` in
+    /// substep `sub`), reconciled with its tethers if it left them.
+    ///
+    /// # Safety
+    /// Particle `i` belongs to the calling item.
+    #[inline]
+    unsafe fn settle(
+        &self,
+        i: usize,
+        sub: u32,
+        start: Vec3A,
+        mut p: Vec3A,
+        colliders: &[SweptCollider],
+    ) {
+        // SAFETY: the caller's contract.
+        unsafe {
+            if self.tether_violated(i, p, sub) {
+                p = self.reconcile(i, start, p, sub, colliders);
+            }
+            self.xs.set(i, p);
+        }
     }
 
     /// Collides particle `i`, moving from `start` to `p` in substep `sub`, with the scene's
-    /// colliders and planes and stores the result. `first`: the first pass over the colliders
-    /// was already made (`p` is its result), and the place in the scene's order of the last
-    /// collider that moved the particle (`None`: none did).
+    /// colliders and planes and stores the result; `resume` says which passes were already
+    /// made ([`Resume`]).
     ///
     /// A pass tests the colliders, then the planes, in the scene's order, and is repeated
     /// while it moves the particle. The pass after the first tests only the shapes before the
@@ -2078,24 +2128,27 @@ impl StepContext<'_> {
         sub: u32,
         start: Vec3A,
         mut p: Vec3A,
-        first: Option<Option<u16>>,
+        resume: Resume,
         scene: &Scene<'_>,
     ) {
         let k = &self.k;
         let colliders = scene.colliders;
         let collider_count = scene.near.map_or(colliders.len(), <[u16]>::len);
-        let mut touched = false;
+        let mut touched = resume == Resume::ThirdPass;
         let mut settled = true;
         // Shapes (colliders, then planes) this pass tests: those before `limit`.
         let mut limit = usize::MAX;
         // SAFETY: the caller's contract (the particle's position before the first pass).
         let before = unsafe { self.xs.get(i) };
         let (box_low, box_high) = (start.min(before), start.max(before));
-        for pass in 0..3 {
+        let passes = if touched { 2..3 } else { 0..3 };
+        for pass in passes {
             // The place of the last shape that moved the particle in this pass.
             let mut last: Option<usize> = None;
-            match first {
-                Some(first_last) if pass == 0 => last = first_last.map(usize::from),
+            match resume {
+                Resume::AfterColliders(first_last) if pass == 0 => {
+                    last = first_last.map(usize::from)
+                }
                 _ => {
                     let (seg_low, seg_high) = (start.min(p), start.max(p));
                     let mut test = |place: usize, collider: &SweptCollider| {
@@ -2169,10 +2222,11 @@ impl StepContext<'_> {
         }
         // SAFETY: the caller's contract.
         unsafe {
-            if touched && self.tether_violated(i, p, sub) {
-                p = self.reconcile(i, start, p, sub, colliders);
+            if touched {
+                self.settle(i, sub, start, p, colliders);
+            } else {
+                self.xs.set(i, p);
             }
-            self.xs.set(i, p);
         }
     }
 
@@ -2283,14 +2337,25 @@ impl StepContext<'_> {
     }
 }
 
-/// The first collision pass of eight particles (see [`StepContext::collide_group`]).
+/// The collision passes of eight particles made together ([`StepContext::collide_group`]).
 struct GroupPass {
-    start: [Vec3A; LANES],
+    /// The positions after them.
     p: [Vec3A; LANES],
-    /// The lanes moved, as bits.
-    moved: u32,
-    /// Per moved lane: the place in the scene's order of the last collider that moved it.
+    /// Per lane the first pass moved: the place in the scene's order of the last collider
+    /// that moved it.
     last: [u16; LANES],
+}
+
+/// Where [`StepContext::collide_particle`] starts.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+enum Resume {
+    /// At the first pass.
+    Fresh,
+    /// After the first pass's colliders (not its planes); the place in the scene's order of
+    /// the last collider that moved the particle (`None`: none did).
+    AfterColliders(Option<u16>),
+    /// At the third pass: the first two moved the particle.
+    ThirdPass,
 }
 
 /// Every lane of a group of eight, as bits.
@@ -2310,13 +2375,16 @@ struct Scene<'a> {
     shapes: usize,
 }
 
-/// The first collision pass of eight particles (`start`: at the substep start, `now`: now,
-/// both eight consecutive particles) over the scene's colliders, in order, as the
-/// one-particle pass makes it: each collider screens the eight
-/// ([`SweptCollider::candidates`]) and collides the lanes it may move. Returns the lanes
-/// moved and writes the start and resulting positions and, for each moved lane, the place in
-/// the scene's order of the last collider that moved it to `out`; `None` (and nothing useful
-/// in `out`) if a position is not finite.
+/// The collision passes over the scene's colliders of eight particles (`start`: at the
+/// substep start, `now`: now, both eight consecutive particles), made together in lanes as
+/// [`StepContext::collide_particle`] makes them for each particle: the first pass, and if
+/// `second`, the second one for the lanes the first moved (`prune`: testing only the
+/// colliders before the last mover of a particle that stayed within its box; tests turn it
+/// off). A collider tests the lanes whose path box meets its own. Returns the lanes moved and
+/// those the second pass moved (they need the third pass, made one by one), and writes the
+/// positions after the passes, and per lane moved in the first pass the place in the
+/// scene's order of the last collider that moved it, to `out`; `None` (and nothing useful in
+/// `out`) if a position is not finite.
 ///
 /// # Safety
 /// `start` and `now` point at eight particles that the calling item owns.
@@ -2327,8 +2395,9 @@ unsafe fn collide8(
     now: *const Vec3A,
     scene: &Scene<'_>,
     contact: (f32, f32),
-    out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES], &mut [u16; LANES]),
-) -> Option<u32> {
+    passes: (bool, bool),
+    out: &mut GroupPass,
+) -> Option<(u32, u32)> {
     dispatch_lanes!(
         isa,
         collide8_with(
@@ -2336,8 +2405,9 @@ unsafe fn collide8(
             now: *const Vec3A,
             scene: &Scene<'_>,
             contact: (f32, f32),
-            out: (&mut [Vec3A; LANES], &mut [Vec3A; LANES], &mut [u16; LANES]),
-        ) -> Option<u32>
+            passes: (bool, bool),
+            out: &mut GroupPass,
+        ) -> Option<(u32, u32)>
     )
 }
 
@@ -2347,22 +2417,13 @@ unsafe fn collide8_with<L: Lanes>(
     now: *const Vec3A,
     scene: &Scene<'_>,
     (thickness, friction): (f32, f32),
-    (start_out, p, last): (&mut [Vec3A; LANES], &mut [Vec3A; LANES], &mut [u16; LANES]),
-) -> Option<u32> {
+    (second, prune): (bool, bool),
+    out: &mut GroupPass,
+) -> Option<(u32, u32)> {
     let index: [u32; LANES] = std::array::from_fn(|l| offset(l as u32));
     // SAFETY: the caller's contract.
-    unsafe {
-        *start_out = std::array::from_fn(|l| *start.add(l));
-        *p = std::array::from_fn(|l| *now.add(l));
-    }
-    // SAFETY: eight positions each.
-    let (s, first) = unsafe {
-        (
-            L::gather(start_out.as_ptr(), &index),
-            L::gather(p.as_ptr(), &index),
-        )
-    };
-    // (No closure: it would not inherit the caller's target features.) `|v|² · 0` is zero
+    let (s, first) = unsafe { (L::gather(start, &index), L::gather(now, &index)) };
+    // (No closures: they would not inherit the caller's target features.) `|v|² · 0` is zero
     // for a finite `v` and NaN for an infinite or NaN one (or one too large to square, which
     // the one-particle path then handles too).
     let zero = L::splat(0.0);
@@ -2374,36 +2435,70 @@ unsafe fn collide8_with<L: Lanes>(
     {
         return None;
     }
-    let mut moved = 0u32;
-    let mut lanes = first;
     let count = scene.near.map_or(scene.colliders.len(), <[u16]>::len);
+    // Masks: no lane.
+    let mut moved = zero;
+    let mut last = zero;
+    let mut p = first;
     for c in 0..count {
         let collider = match scene.near {
             None => &scene.colliders[c],
             Some(near) => &scene.colliders[near[c] as usize],
         };
-        let mut hits = collider.candidates(s, first, lanes, thickness);
-        if hits == 0 {
+        let lanes = collider.overlaps_lanes(s, first);
+        if lanes.bits() == 0 {
             continue;
         }
-        let mut changed = false;
-        while hits != 0 {
-            let l = hits.trailing_zeros() as usize;
-            hits &= hits - 1;
-            let (q, hit) = collider.collide(start_out[l], p[l], thickness, friction);
-            if hit {
-                p[l] = q;
-                moved |= 1 << l;
-                last[l] = c as u16;
-                changed = true;
-            }
+        let (q, hit) = collider.collide_lanes(s, p, lanes, thickness, friction);
+        if hit.bits() == 0 {
+            continue;
         }
-        if changed {
-            // SAFETY: `p` holds eight positions.
-            lanes = unsafe { L::gather(p.as_ptr(), &index) };
+        p = V3::select(hit, q, p);
+        last = L::select(hit, L::splat(c as f32), last);
+        moved = moved.or(hit);
+    }
+    let mut again = zero;
+    if second && moved.bits() != 0 {
+        // The second pass, over the lanes the first moved: the colliders before the last
+        // mover if the particle stayed within the box of its path at the start of the first
+        // pass, else all of them.
+        let p1 = p;
+        let in_box =
+            s.x.le(p1.x)
+                .or(first.x.le(p1.x))
+                .and(s.y.le(p1.y).or(first.y.le(p1.y)))
+                .and(s.z.le(p1.z).or(first.z.le(p1.z)))
+                .and(p1.x.le(s.x).or(p1.x.le(first.x)))
+                .and(p1.y.le(s.y).or(p1.y.le(first.y)))
+                .and(p1.z.le(s.z).or(p1.z.le(first.z)));
+        let in_box = if prune { in_box } else { zero };
+        let limit = L::select(in_box, last, L::splat(f32::INFINITY));
+        for c in 0..count {
+            let active = moved.and(limit.gt(L::splat(c as f32)));
+            if active.bits() == 0 {
+                continue;
+            }
+            let collider = match scene.near {
+                None => &scene.colliders[c],
+                Some(near) => &scene.colliders[near[c] as usize],
+            };
+            let lanes = collider.overlaps_lanes(s, p1).and(active);
+            if lanes.bits() == 0 {
+                continue;
+            }
+            let (q, hit) = collider.collide_lanes(s, p, lanes, thickness, friction);
+            if hit.bits() == 0 {
+                continue;
+            }
+            p = V3::select(hit, q, p);
+            again = again.or(hit);
         }
     }
-    Some(moved)
+    // SAFETY: `out.p` holds eight positions.
+    unsafe { L::scatter(out.p.as_mut_ptr(), &index, p) };
+    let last = last.to_array();
+    out.last = std::array::from_fn(|l| last[l] as u16);
+    Some((moved.bits(), again.bits()))
 }
 
 /// The smallest displacement `d` with `n_a·d ≥ -s_a` and `n_b·d ≥ -s_b` (both `s < 0`: the
@@ -2785,7 +2880,7 @@ mod tests {
         // the one-particle pass's result bit for bit, lane by lane.
         let mut seed = 777u32;
         let mut r = |scale: f32| (random(&mut seed) - 0.5) * scale;
-        let (mut hit_lanes, mut missed_lanes) = (0, 0);
+        let (mut hit_lanes, mut missed_lanes, mut second_lanes) = (0, 0, 0);
         for round in 0..200 {
             let mut swept = Vec::new();
             for c in 0..4 {
@@ -2814,7 +2909,7 @@ mod tests {
             }
             // Each particle near one collider's first sphere; lanes 4 and 5 within a few
             // millimetres of its skin, lanes 6 and 7 on it (cloth resting on the body) and
-            // moving 50 µm inwards: where the screen's margin matters.
+            // moving 50 µm inwards: resting contacts, decided by the contact tolerance.
             let mut inwards = [Vec3A::ZERO; LANES];
             let start: [Vec3A; LANES] = std::array::from_fn(|l| {
                 let c = &swept[l % swept.len()];
@@ -2864,41 +2959,80 @@ mod tests {
                         }
                     }
                 }
-                for isa in [Isa::Baseline, Isa::detect()] {
-                    let (mut s, mut p) = ([Vec3A::ZERO; LANES], [Vec3A::ZERO; LANES]);
-                    let mut last = [0u16; LANES];
-                    // SAFETY: eight positions each.
-                    let moved = unsafe {
-                        collide8(
-                            isa,
-                            start.as_ptr(),
-                            now.as_ptr(),
-                            &scene,
-                            (0.003, 0.4),
-                            (&mut s, &mut p, &mut last),
-                        )
+                // The second pass as the one-particle path makes it (see `collide_particle`):
+                // over the colliders before the last mover if the particle stayed within its
+                // first path's box, else over all of them.
+                let mut expected_second = expected;
+                let mut expected_again = 0u32;
+                for l in (0..LANES).filter(|&l| expected_moved & (1 << l) != 0) {
+                    let (low, high) = (start[l].min(now[l]), start[l].max(now[l]));
+                    let in_box = expected[l].cmpge(low).all() && expected[l].cmple(high).all();
+                    let limit = if in_box {
+                        expected_last[l] as usize
+                    } else {
+                        usize::MAX
                     };
-                    assert_eq!(moved, Some(expected_moved), "round {round} {isa:?}");
-                    for l in (0..LANES).filter(|&l| expected_moved & (1 << l) != 0) {
-                        assert_eq!(last[l], expected_last[l], "round {round} lane {l}");
+                    let (low, high) = (start[l].min(expected[l]), start[l].max(expected[l]));
+                    for &c in order.iter().take(limit) {
+                        if swept[c].overlaps(low, high) {
+                            let (q, hit) =
+                                swept[c].collide(start[l], expected_second[l], 0.003, 0.4);
+                            if hit {
+                                expected_second[l] = q;
+                                expected_again |= 1 << l;
+                            }
+                        }
                     }
-                    hit_lanes += expected_moved.count_ones();
-                    missed_lanes += LANES as u32 - expected_moved.count_ones();
-                    assert_eq!(s, start);
-                    for l in 0..LANES {
+                }
+                for isa in [Isa::Baseline, Isa::detect()] {
+                    for second in [false, true] {
+                        let mut pass = GroupPass {
+                            p: [Vec3A::ZERO; LANES],
+                            last: [0; LANES],
+                        };
+                        // SAFETY: eight positions each.
+                        let moved = unsafe {
+                            collide8(
+                                isa,
+                                start.as_ptr(),
+                                now.as_ptr(),
+                                &scene,
+                                (0.003, 0.4),
+                                (second, true),
+                                &mut pass,
+                            )
+                        };
+                        let (want, again) = if second {
+                            (expected_second, expected_again)
+                        } else {
+                            (expected, 0)
+                        };
                         assert_eq!(
-                            p[l].to_array(),
-                            expected[l].to_array(),
-                            "round {round} lane {l}"
+                            moved,
+                            Some((expected_moved, again)),
+                            "round {round} {isa:?}"
                         );
+                        for l in (0..LANES).filter(|&l| expected_moved & (1 << l) != 0) {
+                            assert_eq!(pass.last[l], expected_last[l], "round {round} lane {l}");
+                        }
+                        hit_lanes += expected_moved.count_ones();
+                        missed_lanes += LANES as u32 - expected_moved.count_ones();
+                        second_lanes += again.count_ones();
+                        for (l, (got, want)) in pass.p.iter().zip(&want).enumerate() {
+                            assert_eq!(
+                                got.to_array(),
+                                want.to_array(),
+                                "round {round} lane {l} second {second}"
+                            );
+                        }
                     }
                 }
             }
         }
         // Both outcomes were exercised.
         assert!(
-            hit_lanes > 500 && missed_lanes > 500,
-            "{hit_lanes} hit, {missed_lanes} not"
+            hit_lanes > 500 && missed_lanes > 500 && second_lanes > 0,
+            "{hit_lanes} hit, {missed_lanes} not, {second_lanes} in the second pass"
         );
     }
 
@@ -2918,7 +3052,10 @@ mod tests {
         };
         let mut now = [Vec3A::splat(0.05); LANES];
         now[5].y = f32::NAN;
-        let (mut s, mut p) = ([Vec3A::ZERO; LANES], [Vec3A::ZERO; LANES]);
+        let mut pass = GroupPass {
+            p: [Vec3A::ZERO; LANES],
+            last: [0; LANES],
+        };
         for isa in [Isa::Baseline, Isa::detect()] {
             // SAFETY: eight positions each.
             let moved = unsafe {
@@ -2928,7 +3065,8 @@ mod tests {
                     now.as_ptr(),
                     &scene,
                     (0.003, 0.0),
-                    (&mut s, &mut p, &mut [0; LANES]),
+                    (true, true),
+                    &mut pass,
                 )
             };
             assert_eq!(moved, None);
@@ -3099,7 +3237,7 @@ mod tests {
     #[test]
     fn grouped_and_one_by_one_collisions_give_the_same_bits() {
         // A skirt tethered to its waist, around overlapping spheres and capsules (hips, swinging
-        // thighs, pelvis) and standing on the floor: screening eight particles per collider must
+        // thighs, pelvis) and standing on the floor: colliding eight particles together must
         // give the one-particle pass's positions bit for bit, through the later passes, the
         // floor, the crease between overlapping shapes and the tether repairs; and a second
         // pass over only the shapes before the last mover the positions of one over all.
