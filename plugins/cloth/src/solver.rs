@@ -1814,6 +1814,30 @@ impl StepContext<'_> {
                 i += LANES;
                 continue;
             }
+            if let Some(sub) = predict
+                && i + LANES <= range.end
+                && m.inverse_mass[i..i + LANES].iter().all(|&w| w == 0.0)
+            {
+                let slots = &m.attach_slot[i..i + LANES];
+                let anchors = &self.anchors[sub as usize * self.target_start.len()..];
+                // SAFETY: particles `i..i + 8` belong to this item; their slots index the
+                // attachments.
+                unsafe {
+                    follow_anchors(
+                        k.isa,
+                        [
+                            self.xs.as_ptr().add(i),
+                            self.xs_prev.as_ptr().add(i),
+                            self.vs.as_ptr().add(i),
+                        ],
+                        anchors.as_ptr(),
+                        slots,
+                        k.inv_h,
+                    )
+                };
+                i += LANES;
+                continue;
+            }
             let range = i..i + 1;
             i += 1;
             for i in range {
@@ -2756,6 +2780,45 @@ unsafe fn aero_with<L: Lanes>(context: &StepContext<'_>, t: usize, count: usize)
         }
         let force = triangle_force_lanes(p, relative, k.air_density, k.drag, k.lift);
         L::scatter(context.triangle_force.as_ptr(), &slots, force);
+    }
+}
+
+/// Moves eight consecutive attached particles (positions, positions at the substep start and
+/// velocities at `x`) to their attachment targets (`slots` into `anchors`) for the next
+/// substep, as the one-particle path of [`StepContext::particles`] does.
+///
+/// # Safety
+/// The eight particles belong to the calling item; the slots index `anchors`.
+#[inline]
+unsafe fn follow_anchors(
+    isa: Isa,
+    x: [*mut Vec3A; 3],
+    anchors: *const Vec3A,
+    slots: &[u32],
+    inv_h: f32,
+) {
+    dispatch_lanes!(
+        isa,
+        follow_anchors_with(x: [*mut Vec3A; 3], anchors: *const Vec3A, slots: &[u32], inv_h: f32)
+    )
+}
+
+#[inline(always)]
+unsafe fn follow_anchors_with<L: Lanes>(
+    [xs, xs_prev, vs]: [*mut Vec3A; 3],
+    anchors: *const Vec3A,
+    slots: &[u32],
+    inv_h: f32,
+) {
+    let lanes: [u32; LANES] = std::array::from_fn(|l| offset(l as u32));
+    let slots: [u32; LANES] = std::array::from_fn(|l| offset(slots[l]));
+    // SAFETY: the caller's contract.
+    unsafe {
+        let p = L::gather(xs, &lanes);
+        let target = L::gather(anchors, &slots);
+        L::scatter(xs_prev, &lanes, p);
+        L::scatter(xs, &lanes, target);
+        L::scatter(vs, &lanes, (target - p).scale(L::splat(inv_h)));
     }
 }
 
