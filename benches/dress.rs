@@ -45,7 +45,9 @@ fn bench_dress(c: &mut Criterion) {
         dress_4k(&model, &assets.join("garments/sundress.ron")).expect("the 4,000-particle dress");
     let motion = assets.join(fitroom::assets::DEFAULT_MOTION);
     let mut walk = Walk::new(&model, &shaped, &motion).expect("the walk");
-    let poses: Vec<Vec<Affine3A>> = (1..FRAMES).flat_map(|_| walk.next_frame()).collect();
+    // Up to the clip's last frame (the next would wrap to its first, a jump).
+    let frames = FRAMES.min(walk.frames());
+    let poses: Vec<Vec<Affine3A>> = (1..frames).flat_map(|_| walk.next_frame()).collect();
     // Forwards, then backwards: the body never jumps.
     let order: Vec<usize> = (0..poses.len()).chain((0..poses.len()).rev()).collect();
 

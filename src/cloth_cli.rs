@@ -227,6 +227,11 @@ impl<'a> Walk<'a> {
         })
     }
 
+    /// The clip's frames (30 Hz); [`Self::next_frame`] wraps past the last to the first.
+    pub fn frames(&self) -> usize {
+        self.stream.len()
+    }
+
     /// The skinning of each 120 Hz step of the next frame.
     pub fn next_frame(&mut self) -> Vec<Vec<Affine3A>> {
         let frame = &self.stream[self.next % self.stream.len()];
