@@ -1817,11 +1817,14 @@ impl StepContext<'_> {
             if let Some(sub) = predict
                 && i + LANES <= range.end
                 && m.inverse_mass[i..i + LANES].iter().all(|&w| w == 0.0)
+                && m.attach_slot[i..i + LANES]
+                    .iter()
+                    .all(|&slot| (slot as usize) < self.target_start.len())
             {
                 let slots = &m.attach_slot[i..i + LANES];
                 let anchors = &self.anchors[sub as usize * self.target_start.len()..];
                 // SAFETY: particles `i..i + 8` belong to this item; their slots index the
-                // attachments.
+                // attachments (checked above).
                 unsafe {
                     follow_anchors(
                         k.isa,
@@ -2138,8 +2141,8 @@ impl StepContext<'_> {
     /// A pass tests the colliders, then the planes, in the scene's order, and is repeated
     /// while it moves the particle. The pass after the first tests only the shapes before the
     /// last one that moved it, if the particle ended the first pass within the box of its
-    /// path at the start of that pass (the box a collider's bounds were screened with): the
-    /// shapes after the last mover tested it where it still is, or were screened out by a box
+    /// path at the start of that pass (the box tested against each collider's bounds): the
+    /// shapes after the last mover tested it where it still is, or their bounds missed a box
     /// that holds its new path, and a shape leaves a particle it moved on its skin, where it
     /// does not move it again (`CONTACT_TOLERANCE`). Otherwise, and in a third pass, every
     /// shape is tested.
@@ -2408,7 +2411,7 @@ struct Scene<'a> {
 /// those the second pass moved (they need the third pass, made one by one), and writes the
 /// positions after the passes, and per lane moved in the first pass the place in the
 /// scene's order of the last collider that moved it, to `out`; `None` (and nothing useful in
-/// `out`) if a position is not finite.
+/// `out`) if a position is not finite, or the first pass made one so.
 ///
 /// # Safety
 /// `start` and `now` point at eight particles that the calling item owns.
@@ -2485,8 +2488,12 @@ unsafe fn collide8_with<L: Lanes>(
     if second && moved.bits() != 0 {
         // The second pass, over the lanes the first moved: the colliders before the last
         // mover if the particle stayed within the box of its path at the start of the first
-        // pass, else all of them.
+        // pass, else all of them. (A position the first pass made not finite: the whole
+        // group one by one, as for a non-finite input.)
         let p1 = p;
+        if (p1.dot(p1) * zero).is_nan().bits() != 0 {
+            return None;
+        }
         let in_box =
             s.x.le(p1.x)
                 .or(first.x.le(p1.x))
