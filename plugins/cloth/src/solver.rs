@@ -2402,6 +2402,17 @@ struct Scene<'a> {
     shapes: usize,
 }
 
+impl Scene<'_> {
+    /// The collider at place `c` of the scene's order.
+    #[inline]
+    fn collider(&self, c: usize) -> &SweptCollider {
+        match self.near {
+            None => &self.colliders[c],
+            Some(near) => &self.colliders[near[c] as usize],
+        }
+    }
+}
+
 /// The collision passes over the scene's colliders of eight particles (`start`: at the
 /// substep start, `now`: now, both eight consecutive particles), made together in lanes as
 /// [`StepContext::collide_particle`] makes them for each particle: the first pass, and if
@@ -2438,12 +2449,34 @@ unsafe fn collide8(
     )
 }
 
+/// One collider's test in a pass of [`collide8`]: the lanes of `active` whose path box (from
+/// `path.0` to `path.1`) meets the collider's are collided at `p`, which takes the moved
+/// ones' new positions; returns the lanes moved.
+#[inline(always)]
+fn collide_near<L: Lanes>(
+    collider: &SweptCollider,
+    (start, box_end): (V3<L>, V3<L>),
+    p: &mut V3<L>,
+    active: L,
+    (thickness, friction): (f32, f32),
+) -> L {
+    let lanes = collider.overlaps_lanes(start, box_end).and(active);
+    if lanes.bits() == 0 {
+        return lanes;
+    }
+    let (q, hit) = collider.collide_lanes(start, *p, lanes, thickness, friction);
+    if hit.bits() != 0 {
+        *p = V3::select(hit, q, *p);
+    }
+    hit
+}
+
 #[inline(always)]
 unsafe fn collide8_with<L: Lanes>(
     start: *const Vec3A,
     now: *const Vec3A,
     scene: &Scene<'_>,
-    (thickness, friction): (f32, f32),
+    contact: (f32, f32),
     (second, prune): (bool, bool),
     out: &mut GroupPass,
 ) -> Option<(u32, u32)> {
@@ -2467,22 +2500,13 @@ unsafe fn collide8_with<L: Lanes>(
     let mut moved = zero;
     let mut last = zero;
     let mut p = first;
+    let every = zero.le(zero);
     for c in 0..count {
-        let collider = match scene.near {
-            None => &scene.colliders[c],
-            Some(near) => &scene.colliders[near[c] as usize],
-        };
-        let lanes = collider.overlaps_lanes(s, first);
-        if lanes.bits() == 0 {
-            continue;
+        let hit = collide_near(scene.collider(c), (s, first), &mut p, every, contact);
+        if hit.bits() != 0 {
+            last = L::select(hit, L::splat(c as f32), last);
+            moved = moved.or(hit);
         }
-        let (q, hit) = collider.collide_lanes(s, p, lanes, thickness, friction);
-        if hit.bits() == 0 {
-            continue;
-        }
-        p = V3::select(hit, q, p);
-        last = L::select(hit, L::splat(c as f32), last);
-        moved = moved.or(hit);
     }
     let mut again = zero;
     if second && moved.bits() != 0 {
@@ -2506,23 +2530,10 @@ unsafe fn collide8_with<L: Lanes>(
         let limit = L::select(in_box, last, L::splat(f32::INFINITY));
         for c in 0..count {
             let active = moved.and(limit.gt(L::splat(c as f32)));
-            if active.bits() == 0 {
-                continue;
+            if active.bits() != 0 {
+                let hit = collide_near(scene.collider(c), (s, p1), &mut p, active, contact);
+                again = again.or(hit);
             }
-            let collider = match scene.near {
-                None => &scene.colliders[c],
-                Some(near) => &scene.colliders[near[c] as usize],
-            };
-            let lanes = collider.overlaps_lanes(s, p1).and(active);
-            if lanes.bits() == 0 {
-                continue;
-            }
-            let (q, hit) = collider.collide_lanes(s, p, lanes, thickness, friction);
-            if hit.bits() == 0 {
-                continue;
-            }
-            p = V3::select(hit, q, p);
-            again = again.or(hit);
         }
     }
     // SAFETY: `out.p` holds eight positions.
