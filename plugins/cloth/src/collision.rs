@@ -236,23 +236,46 @@ impl Shape {
         }
     }
 
-    /// [`Self::distance_normal`] for eight points at once (relative to `origin`); it may
-    /// differ from it by rounding. [`SweptCollider::collide`] and
+    /// The lanes whose point `p` (relative to `origin`) is at least `√reach2` outside the skin
+    /// of `thickness`: a cheap, conservative test (one square root, no division). The shape
+    /// lies within the larger end radius of its axis segment, so a point `D` from the segment
+    /// is at least `D` minus that radius from the shape.
+    #[inline(always)]
+    pub(crate) fn clear_by_lanes<L: Lanes>(&self, p: V3<L>, reach2: L, thickness: f32) -> L {
+        let zero = L::splat(0.0);
+        let axis = V3::splat(self.axis);
+        let along = p.dot(axis);
+        let along = L::select(along.gt(zero), along, zero);
+        let along = L::select(along.gt(L::splat(self.len)), L::splat(self.len), along);
+        let off = p - axis.scale(along);
+        let clearance = off.dot(off).sqrt() - L::splat(self.ra.max(self.rb) + thickness);
+        zero.le(clearance).and(reach2.le(clearance * clearance))
+    }
+
+    /// [`Self::distance_normal`] for eight points at once (relative to `origin`), the normal
+    /// left to [`Nearest::normal`] (a caller may not need it); it may differ from
+    /// [`Self::distance_normal`] by rounding. [`SweptCollider::collide`] and
     /// [`SweptCollider::collide_lanes`] use this one, so that one particle and eight give the
     /// same bits.
     #[inline(always)]
-    fn distance_normal_lanes<L: Lanes>(&self, p: V3<L>) -> (L, V3<L>) {
-        let (tiny, one) = (L::splat(1e-12), L::splat(1.0));
+    fn nearest_lanes<L: Lanes>(&self, p: V3<L>) -> Nearest<L> {
         if self.sphere {
             let d = p.dot(p).sqrt();
-            let n = V3::select(d.gt(tiny), p.scale(one.div(d)), V3::splat(Vec3A::Y));
-            return (d - L::splat(self.ra), n);
+            let (zero, one) = (L::splat(0.0), L::splat(1.0));
+            return Nearest {
+                distance: d - L::splat(self.ra),
+                on_sphere: zero.le(one),
+                at_a: zero.gt(one),
+                v: p,
+                dv: d,
+                radial: p,
+                y: d,
+            };
         }
         let axis = V3::splat(self.axis);
         let x = p.dot(axis);
         let radial = p - axis.scale(x);
         let y = radial.dot(radial).sqrt();
-        let rhat = V3::select(y.gt(tiny), radial.scale(one.div(y)), V3::splat(self.perp));
         let (sin, cos) = (L::splat(self.sin), L::splat(self.cos));
         let u = x * cos - y * sin;
         // Nearest to the first sphere (u < 0), to the second (u > side), else to the side.
@@ -260,13 +283,16 @@ impl Shape {
         let at_sphere = at_a.or(u.gt(L::splat(self.side)));
         let v = V3::select(at_a, p, p - axis.scale(L::splat(self.len)));
         let dv = v.dot(v).sqrt();
-        let along = V3::select(at_a, V3::splat(-self.axis), axis);
-        let nv = V3::select(dv.gt(tiny), v.scale(one.div(dv)), along);
         let r = L::select(at_a, L::splat(self.ra), L::splat(self.rb));
-        (
-            L::select(at_sphere, dv - r, x * sin + y * cos - L::splat(self.ra)),
-            V3::select(at_sphere, nv, axis.scale(sin) + rhat.scale(cos)),
-        )
+        Nearest {
+            distance: L::select(at_sphere, dv - r, x * sin + y * cos - L::splat(self.ra)),
+            on_sphere: at_sphere,
+            at_a,
+            v,
+            dv,
+            radial,
+            y,
+        }
     }
 
     /// Bounding box (min, max) in the simulation frame.
@@ -282,6 +308,52 @@ impl Shape {
                 (self.origin + ra).max(b + rb),
             )
         }
+    }
+}
+
+/// What [`Shape::nearest_lanes`] found for eight points: their signed distances, and what
+/// their outward normals are made from.
+#[derive(Clone, Copy)]
+struct Nearest<L> {
+    distance: L,
+    /// Nearest to an end sphere (every lane of a sphere), not to the side.
+    on_sphere: L,
+    /// Nearest to the first end sphere.
+    at_a: L,
+    /// From the end sphere's centre, and its length.
+    v: V3<L>,
+    dv: L,
+    /// From the axis, and its length.
+    radial: V3<L>,
+    y: L,
+}
+
+impl<L: Lanes> Nearest<L> {
+    /// The outward unit normals at the nearest points (as [`Shape::distance_normal`] makes
+    /// them where a length is zero).
+    #[inline(always)]
+    fn normal(&self, shape: &Shape) -> V3<L> {
+        let (tiny, one) = (L::splat(1e-12), L::splat(1.0));
+        if shape.sphere {
+            return V3::select(
+                self.dv.gt(tiny),
+                self.v.scale(one.div(self.dv)),
+                V3::splat(Vec3A::Y),
+            );
+        }
+        let axis = V3::splat(shape.axis);
+        let rhat = V3::select(
+            self.y.gt(tiny),
+            self.radial.scale(one.div(self.y)),
+            V3::splat(shape.perp),
+        );
+        let along = V3::select(self.at_a, V3::splat(-shape.axis), axis);
+        let nv = V3::select(self.dv.gt(tiny), self.v.scale(one.div(self.dv)), along);
+        V3::select(
+            self.on_sphere,
+            nv,
+            axis.scale(L::splat(shape.sin)) + rhat.scale(L::splat(shape.cos)),
+        )
     }
 }
 
@@ -364,29 +436,44 @@ impl SweptCollider {
     ) -> (V3<L>, L) {
         let origin = V3::splat(self.end.origin);
         let l1 = now - origin;
-        let (d1, n1) = self.end.distance_normal_lanes(l1);
-        let skin = L::splat(thickness);
-        let s1 = d1 - skin;
         let d = start - V3::splat(self.start_origin);
         let r = &self.rotation;
         let l0 = V3::splat(r.x_axis).scale(d.x)
             + V3::splat(r.y_axis).scale(d.y)
             + V3::splat(r.z_axis).scale(d.z);
         let path = l1 - l0;
-        let travel = path.dot(path).sqrt();
+        let travel2 = path.dot(path);
+        // Most lanes tested are clear of the collider by more than their path: found first
+        // with one square root and no division.
+        let far = self.end.clear_by_lanes(l1, travel2, thickness);
+        let zero = L::splat(0.0);
+        if lanes.and_not(far).bits() == 0 {
+            return (now, zero.gt(zero));
+        }
+        let nearest1 = self.end.nearest_lanes(l1);
+        let skin = L::splat(thickness);
+        let s1 = nearest1.distance - skin;
+        let travel = travel2.sqrt();
         // Every point of the relative path is at least s1 - travel ≥ 0 away.
-        let mut hit = lanes.and_not(travel.le(s1));
+        let mut hit = lanes.and_not(far).and_not(travel.le(s1));
         if hit.bits() == 0 {
             return (now, hit);
         }
-        let (d0, n0) = self.end.distance_normal_lanes(l0);
+        let nearest0 = self.end.nearest_lanes(l0);
+        let (d0, n0) = (nearest0.distance, nearest0.normal(&self.end));
         let s0 = d0 - skin;
-        let (zero, tolerance) = (L::splat(0.0), L::splat(CONTACT_TOLERANCE));
+        let tolerance = L::splat(CONTACT_TOLERANCE);
         // "Outside" at the start means outside the bare shape: within the skin the nearest
         // surface point is still on the particle's side. Started outside: clip against the
         // tangent plane at the nearest point to l0 (untouched if the path cannot have crossed
         // the shape, or ends on the plane's near side).
         let outside = zero.le(d0);
+        // The normal at the end point serves only the lanes that started inside.
+        let n1 = if hit.and_not(outside).bits() != 0 {
+            nearest1.normal(&self.end)
+        } else {
+            V3::splat(Vec3A::ZERO)
+        };
         let depth_out = -path.dot(n0) - s0;
         let projected_out = l1 + n0.scale(depth_out);
         let across = projected_out - l0;
@@ -510,6 +597,70 @@ mod tests {
                 assert!(d <= 1e-4, "inside point {p} got {d}");
             }
         }
+    }
+
+    /// The cheap test that lets most lanes skip the continuous test only passes points that
+    /// are at least the asked distance outside the skin, measured by sampling the union of
+    /// spheres; and it passes most points that are clearly that far out.
+    #[test]
+    fn the_cheap_clearance_test_passes_only_points_that_far_out() {
+        let thickness = 0.003;
+        let shapes = [
+            (
+                Vec3::new(0.1, 0.2, -0.1),
+                Vec3::new(0.4, -0.1, 0.3),
+                0.12,
+                0.05,
+            ),
+            (
+                Vec3::new(-0.2, 0.0, 0.1),
+                Vec3::new(0.1, 0.3, 0.0),
+                0.04,
+                0.09,
+            ),
+            (
+                Vec3::new(0.05, 0.05, 0.05),
+                Vec3::new(0.05, 0.05, 0.05),
+                0.1,
+                0.1,
+            ),
+        ];
+        let mut seed = 777u32;
+        let mut rnd = || {
+            seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
+            (seed >> 8) as f32 / (1u32 << 24) as f32 - 0.5
+        };
+        let (mut passed, mut clear_by_far) = (0, 0);
+        for (a, b, ra, rb) in shapes {
+            let shape = if a == b {
+                Shape::sphere(Vec3A::from(a), ra)
+            } else {
+                Shape::round_cone(Vec3A::from(a), Vec3A::from(b), ra, rb)
+            };
+            for _ in 0..2000 {
+                let p = Vec3::new(rnd(), rnd(), rnd()) * 1.2 + (a + b) * 0.5;
+                let reach = (rnd() + 0.5) * 0.2;
+                let exact = sampled_distance(a, b, ra, rb, p) - thickness;
+                let lanes = shape.clear_by_lanes(
+                    V3::<Baseline8>::splat(Vec3A::from(p) - shape.origin),
+                    Baseline8::splat(reach * reach),
+                    thickness,
+                );
+                if lanes.bits() & 1 != 0 {
+                    passed += 1;
+                    assert!(exact >= reach - 1e-5, "p {p}: {exact} m out, asked {reach}");
+                }
+                // Clear by the larger radius's difference more than asked: always passed.
+                if exact >= reach + (ra - rb).abs() + 1e-4 {
+                    clear_by_far += 1;
+                    assert!(lanes.bits() & 1 != 0, "p {p}: {exact} m out, asked {reach}");
+                }
+            }
+        }
+        assert!(
+            passed > 1000 && clear_by_far > 500,
+            "{passed} passed, {clear_by_far} far"
+        );
     }
 
     #[test]
