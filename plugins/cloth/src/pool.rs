@@ -128,6 +128,11 @@ impl WorkerPool {
         }
     }
 
+    /// Whether no worker is asleep (each is spinning for the next job, or running one).
+    pub fn awake(&self) -> bool {
+        self.workers.is_empty() || self.shared.lock().sleepers == 0
+    }
+
     /// Runs `job(thread)` on every thread of the pool (the caller is thread 0, the workers
     /// 1, 2, …) and returns when all of them have returned from it.
     pub fn run<'job>(&self, job: &(dyn Fn(usize) + Sync + 'job)) {
