@@ -558,6 +558,8 @@ pub struct ClothSolver {
     solo_steps: u32,
     /// [`Self::prewake`] was called since the last step (the step need not wake them again).
     prewoken: AtomicBool,
+    /// [`Self::run_on_threads`] is running a job on the workers.
+    dispatching: AtomicBool,
     /// Steps since the last stalled one (see `SOLO_STEPS`).
     since_stall: u32,
     isa: Isa,
@@ -755,6 +757,7 @@ impl ClothSolver {
             pool: WorkerPool::new(settings.threads),
             solo_steps: 0,
             prewoken: AtomicBool::new(false),
+            dispatching: AtomicBool::new(false),
             since_stall: u32::MAX,
             isa: Isa::detect(),
             #[cfg(test)]
@@ -1101,11 +1104,25 @@ impl ClothSolver {
     /// Only workers that are awake are used: while one is still waking (it takes tens of
     /// microseconds, up to a millisecond here; [`Self::prewake`] starts it), or while steps
     /// run on the caller's thread alone (after a stall), that is one call, `job(0, 1)`, which
-    /// the waking overlaps. Returns the number of threads that ran `job`. A panic in `job`
-    /// is raised again here.
+    /// the waking overlaps; so it is, too, when `job` itself calls this, or another thread
+    /// already does (the workers run one job at a time). Returns the number of threads that
+    /// ran `job`. A panic in `job` panics here (on a worker, as "a cloth worker thread
+    /// panicked", its own message printed by that thread).
     pub fn run_on_threads(&self, job: &(dyn Fn(usize, usize) + Sync)) -> usize {
         let threads = self.pool.threads();
-        if threads > 1 && self.solo_steps == 0 && self.pool.awake() {
+        if threads > 1
+            && self.solo_steps == 0
+            && self.pool.awake()
+            && !self.dispatching.swap(true, Ordering::Acquire)
+        {
+            /// Lowers the flag however `run` returns.
+            struct Done<'a>(&'a AtomicBool);
+            impl Drop for Done<'_> {
+                fn drop(&mut self) {
+                    self.0.store(false, Ordering::Release);
+                }
+            }
+            let _done = Done(&self.dispatching);
             self.pool.run(&|thread| job(thread, threads));
             threads
         } else {
@@ -1529,6 +1546,7 @@ impl ClothSolver {
     }
 }
 
+/// Everything one step's items read and write.
 struct StepContext<'a> {
     model: &'a Model,
     k: StepConstants,
@@ -3274,6 +3292,42 @@ mod tests {
             ..SolverSettings::default()
         };
         ClothSolver::new(&mesh, Fabric::cotton(), &top, settings).expect("a valid cloth")
+    }
+
+    /// A caller's job runs once on each thread `run_on_threads` reports, and a call from
+    /// inside a job (the workers are busy with it) runs on that thread alone instead of
+    /// waiting for itself.
+    #[test]
+    fn run_on_threads_runs_a_job_once_per_thread_and_a_nested_one_alone() {
+        let mut cloth = skirt_on_two_threads(Vec3::ZERO, 0.3, 0.5);
+        cloth.step(1.0 / 120.0).expect("a valid step");
+        let mut on_two = false;
+        // Until the worker is awake (a sleeping one is not used; it wakes within milliseconds
+        // even on a busy machine).
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+        while std::time::Instant::now() < deadline {
+            cloth.prewake();
+            let (calls, threads_seen, nested) = (
+                AtomicUsize::new(0),
+                AtomicUsize::new(0),
+                AtomicUsize::new(0),
+            );
+            let used = cloth.run_on_threads(&|thread, threads| {
+                calls.fetch_add(1, Ordering::Relaxed);
+                threads_seen.fetch_or(1 << thread, Ordering::Relaxed);
+                assert!(thread < threads);
+                let inner = cloth.run_on_threads(&|_, _| {});
+                nested.fetch_max(inner, Ordering::Relaxed);
+            });
+            assert_eq!(calls.load(Ordering::Relaxed), used);
+            assert_eq!(threads_seen.load(Ordering::Relaxed), (1 << used) - 1);
+            assert_eq!(nested.load(Ordering::Relaxed), 1);
+            if used == 2 {
+                on_two = true;
+                break;
+            }
+        }
+        assert!(on_two, "the worker never took part");
     }
 
     /// The cloth's positions as bits, for comparisons that must be exact.

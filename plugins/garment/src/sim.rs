@@ -127,7 +127,7 @@ pub struct GarmentSim {
     /// step before the last one.
     posed: Vec<(Vec3, Vec3, f32, f32)>,
     spare_targets: Vec<Vec3>,
-    /// Room for [`fit_to_anchors_with`]'s run bounds.
+    /// Room for [`GarmentSim::pose_on_threads`]' anchor run bounds.
     anchor_runs: Vec<(Vec3, Vec3)>,
     /// [`GarmentSim::step`]'s posing work, shared out to the solver's threads.
     posing: Posing,
@@ -239,21 +239,11 @@ pub fn fit_to_anchors(
     anchors: &[Vec3],
     skin: f32,
 ) -> f32 {
-    fit_to_anchors_with(colliders, anchors, skin, &mut Vec::new())
-}
-
-/// [`fit_to_anchors`] with `runs` as room for the anchor runs' bounds (kept from step to step).
-fn fit_to_anchors_with(
-    colliders: &mut [(Vec3, Vec3, f32, f32)],
-    anchors: &[Vec3],
-    skin: f32,
-    runs: &mut Vec<(Vec3, Vec3)>,
-) -> f32 {
-    runs.clear();
-    anchor_runs_into(anchors, runs);
+    let mut runs = Vec::new();
+    anchor_runs_into(anchors, &mut runs);
     let mut largest = 0.0f32;
     for collider in colliders.iter_mut() {
-        let cuts = collider_cuts(collider, anchors, runs, skin);
+        let cuts = collider_cuts(collider, anchors, &runs, skin);
         largest = largest.max(apply_cuts(collider, cuts));
     }
     largest
@@ -920,7 +910,8 @@ impl GarmentSim {
         self.deepest_of(posed, 0..self.solver.particle_count())
     }
 
-    /// [`Self::deepest`] over the particles of `range` (never negative, never NaN).
+    /// [`Self::deepest`] over the particles of `range` (never negative, never NaN; possibly
+    /// -0.0).
     fn deepest_of(&self, posed: &[(Vec3, Vec3, f32, f32)], range: Range<usize>) -> f32 {
         let start = range.start;
         self.solver.positions()[range]
@@ -964,12 +955,13 @@ impl GarmentSim {
                     break;
                 }
                 // Both maxima are at least zero and never NaN, and the bits of such floats
-                // order as they do.
-                let deepest = self.deepest_of(posed, piece(particles, k));
+                // order as they do; `+ 0.0` turns a maximum of -0.0 (whose bits would beat
+                // every positive float's) into +0.0.
+                let deepest = self.deepest_of(posed, piece(particles, k)) + 0.0;
                 posing
                     .deepest
                     .fetch_max(deepest.to_bits(), Ordering::Relaxed);
-                let strain = self.max_strain_pct_of(piece(edges, k));
+                let strain = self.max_strain_pct_of(piece(edges, k)) + 0.0;
                 posing.strain.fetch_max(strain.to_bits(), Ordering::Relaxed);
             }
         });
@@ -1039,7 +1031,8 @@ mod tests {
             // Until the worker is awake (it sleeps when the machine is busy; a sleeping
             // worker is not waited for: one thread poses alone), as the results must agree
             // either way.
-            for _ in 0..400 {
+            let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
+            while std::time::Instant::now() < deadline {
                 sim.solver.prewake();
                 let (mut targets, mut posed) = (Vec::new(), Vec::new());
                 sim.colliders.posed_into(pose, &mut posed);
