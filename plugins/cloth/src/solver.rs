@@ -3300,31 +3300,33 @@ mod tests {
     #[test]
     fn run_on_threads_runs_a_job_once_per_thread_and_a_nested_one_alone() {
         let mut cloth = skirt_on_two_threads(Vec3::ZERO, 0.3, 0.5);
-        cloth.step(1.0 / 120.0).expect("a valid step");
         let mut on_two = false;
-        // Until the worker is awake (a sleeping one is not used; it wakes within milliseconds
-        // even on a busy machine).
-        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
-        while std::time::Instant::now() < deadline {
-            cloth.prewake();
-            let (calls, threads_seen, nested) = (
-                AtomicUsize::new(0),
-                AtomicUsize::new(0),
-                AtomicUsize::new(0),
-            );
-            let used = cloth.run_on_threads(&|thread, threads| {
-                calls.fetch_add(1, Ordering::Relaxed);
-                threads_seen.fetch_or(1 << thread, Ordering::Relaxed);
-                assert!(thread < threads);
-                let inner = cloth.run_on_threads(&|_, _| {});
-                nested.fetch_max(inner, Ordering::Relaxed);
-            });
-            assert_eq!(calls.load(Ordering::Relaxed), used);
-            assert_eq!(threads_seen.load(Ordering::Relaxed), (1 << used) - 1);
-            assert_eq!(nested.load(Ordering::Relaxed), 1);
-            if used == 2 {
-                on_two = true;
-                break;
+        // Until the worker takes part: a sleeping one is not used, nor any while the steps
+        // run on one thread after a stall (a busy machine); steps end that.
+        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(30);
+        'tries: while std::time::Instant::now() < deadline {
+            cloth.step(1.0 / 120.0).expect("a valid step");
+            for _ in 0..20 {
+                cloth.prewake();
+                let (calls, threads_seen, nested) = (
+                    AtomicUsize::new(0),
+                    AtomicUsize::new(0),
+                    AtomicUsize::new(0),
+                );
+                let used = cloth.run_on_threads(&|thread, threads| {
+                    calls.fetch_add(1, Ordering::Relaxed);
+                    threads_seen.fetch_or(1 << thread, Ordering::Relaxed);
+                    assert!(thread < threads);
+                    let inner = cloth.run_on_threads(&|_, _| {});
+                    nested.fetch_max(inner, Ordering::Relaxed);
+                });
+                assert_eq!(calls.load(Ordering::Relaxed), used);
+                assert_eq!(threads_seen.load(Ordering::Relaxed), (1 << used) - 1);
+                assert_eq!(nested.load(Ordering::Relaxed), 1);
+                if used == 2 {
+                    on_two = true;
+                    break 'tries;
+                }
             }
         }
         assert!(on_two, "the worker never took part");
