@@ -456,11 +456,13 @@ enum Phase {
         /// The first constraint pass of the step: curved bending stencils take a new frame.
         new_frame: bool,
     },
-    /// Per block: finish the last substep, check health and stretch, write the mesh-ordered
-    /// copies.
+    /// Per particle group: finish the last substep, check health, write the mesh-ordered
+    /// copies (in groups, not blocks, so that the thread done with its block first can help
+    /// with the other's).
     Finish,
-    /// Stretch check of the seams' and corners' distance constraints.
-    SeparatorStretch,
+    /// Per constraint item (the blocks, then the seams and corners): the stretch check of its
+    /// distance constraints.
+    Stretch,
 }
 
 /// Constants of one step.
@@ -574,7 +576,8 @@ pub struct ClothSolver {
     phase_items: Vec<u32>,
     /// What `phases` was built for: substeps, iterations, aerodynamics.
     program: Option<(u32, u32, bool)>,
-    block_health: Vec<ItemHealth>,
+    /// Per particle group: what its finish found (see [`ItemHealth`]).
+    group_health: Vec<ItemHealth>,
     /// Per constraint item: largest squared stretch ratio and its distance lane.
     stretch_health: Vec<(f32, u32)>,
 }
@@ -768,7 +771,7 @@ impl ClothSolver {
             phases: Vec::new(),
             phase_items: Vec::new(),
             program: None,
-            block_health: vec![ItemHealth::default(); blocks],
+            group_health: vec![ItemHealth::default(); blocks * PARTICLE_GROUPS],
             stretch_health: vec![(0.0, u32::MAX); items],
         })
     }
@@ -1235,7 +1238,7 @@ impl ClothSolver {
                 distance_inverse: &self.distance_inverse,
                 bend_inverse: &self.bend_inverse,
                 bend_targets: SharedSlice::new(&mut self.bend_targets),
-                block_health: SharedSlice::new(&mut self.block_health),
+                group_health: SharedSlice::new(&mut self.group_health),
                 stretch_health: SharedSlice::new(&mut self.stretch_health),
             };
             let counters = &self.counters;
@@ -1311,11 +1314,8 @@ impl ClothSolver {
                 }
             }
         }
-        push(Phase::Finish, blocks);
-        let separators = self.model.constraints.items.len() as u32 - blocks;
-        if separators > 0 {
-            push(Phase::SeparatorStretch, separators);
-        }
+        push(Phase::Finish, groups);
+        push(Phase::Stretch, self.model.constraints.items.len() as u32);
 
         self.counters.reset(&self.phase_items);
         self.set_dependencies();
@@ -1328,7 +1328,7 @@ impl ClothSolver {
     /// - a block's constraints wait for its particle groups (a further iteration: for its
     ///   last constraint pass and the separators that touch it);
     /// - a seam waits for the blocks it joins; a corner also for every seam;
-    /// - a block's finish waits as its particle groups would.
+    /// - a particle group's finish waits as its next substep would.
     ///
     /// So a thread that is done with its block goes on with the next substep of the groups
     /// that no separator touches while the other thread is still in its block, and the
@@ -1376,7 +1376,19 @@ impl ClothSolver {
                     last_block = Some(pu);
                     separators.clear();
                 }
-                Phase::BlockIteration | Phase::Finish => {
+                // As a particle group's next substep would (a step has a block phase; without
+                // one, the whole phase before).
+                Phase::Finish => {
+                    if let Some(b) = last_block {
+                        for g in 0..blocks * PARTICLE_GROUPS {
+                            deps.clear();
+                            deps.push(Dep::Item(b, (g / PARTICLE_GROUPS) as u32));
+                            group_deps(&mut deps, g, &separators);
+                            counters.set_deps(p, g as u32, deps.iter().copied());
+                        }
+                    }
+                }
+                Phase::BlockIteration => {
                     for x in 0..blocks {
                         deps.clear();
                         deps.extend(last_block.map(|b| Dep::Item(b, x as u32)));
@@ -1385,10 +1397,8 @@ impl ClothSolver {
                         }
                         counters.set_deps(p, x as u32, deps.iter().copied());
                     }
-                    if matches!(phase, Phase::BlockIteration) {
-                        last_block = Some(pu);
-                        separators.clear();
-                    }
+                    last_block = Some(pu);
+                    separators.clear();
                 }
                 Phase::Separators { level, .. } => {
                     let (a, b) = self.model.constraints.separator_levels[level as usize];
@@ -1409,8 +1419,8 @@ impl ClothSolver {
                     }
                     separators.push(pu);
                 }
-                // After every block's finish (the phase before).
-                Phase::SeparatorStretch => {}
+                // After every group's finish (the phase before).
+                Phase::Stretch => {}
             }
         }
     }
@@ -1419,7 +1429,7 @@ impl ClothSolver {
         let mut max_speed2 = 0.0f32;
         let mut fastest = 0u32;
         let mut non_finite = u32::MAX;
-        for h in &self.block_health {
+        for h in &self.group_health {
             non_finite = non_finite.min(h.first_non_finite);
             if h.max_speed2 > max_speed2 {
                 max_speed2 = h.max_speed2;
@@ -1571,7 +1581,7 @@ struct StepContext<'a> {
     distance_inverse: &'a [[f32; LANES]],
     bend_inverse: &'a [[[f32; LANES]; 3]],
     bend_targets: SharedSlice<'a, BendTarget>,
-    block_health: SharedSlice<'a, ItemHealth>,
+    group_health: SharedSlice<'a, ItemHealth>,
     stretch_health: SharedSlice<'a, (f32, u32)>,
 }
 
@@ -1591,8 +1601,8 @@ impl StepContext<'_> {
                 let (a, _) = self.model.constraints.separator_levels[level as usize];
                 self.solve(a as usize + item, first, new_frame);
             }
-            Phase::Finish => self.finish_block(item),
-            Phase::SeparatorStretch => self.stretch(self.model.order.blocks() + item),
+            Phase::Finish => self.finish_group(item),
+            Phase::Stretch => self.stretch(item),
         }
     }
 
@@ -1655,12 +1665,6 @@ impl StepContext<'_> {
         }
     }
 
-    fn chunks(&self, block: usize) -> impl Iterator<Item = std::ops::Range<usize>> + '_ {
-        let o = &self.model.order;
-        (o.block_chunks[block] as usize..o.block_chunks[block + 1] as usize)
-            .map(|c| o.chunk_start[c] as usize..o.chunk_start[c + 1] as usize)
-    }
-
     /// Finishes substep `sub - 1` (if `sub > 0`) and predicts substep `sub` for every chunk of
     /// particle group `group`; the first substep first reads the positions and the aerodynamic
     /// forces.
@@ -1675,14 +1679,16 @@ impl StepContext<'_> {
         }
     }
 
-    /// Finishes the last substep of `block`, checks its health and stretch, and writes its
+    /// Finishes the last substep of particle group `group`, checks its health, and writes its
     /// positions and velocities in mesh order.
-    fn finish_block(&self, block: usize) {
-        for range in self.chunks(block) {
+    fn finish_group(&self, group: usize) {
+        let o = &self.model.order;
+        let chunks = group_chunks(o, group);
+        for c in chunks.clone() {
+            let range = o.chunk_start[c] as usize..o.chunk_start[c + 1] as usize;
             self.particles(Some(self.k.substeps - 1), None, range);
         }
-        let o = &self.model.order;
-        let range = o.block_start[block] as usize..o.block_start[block + 1] as usize;
+        let range = o.chunk_start[chunks.start] as usize..o.chunk_start[chunks.end] as usize;
         let mut h = ItemHealth {
             max_speed2: 0.0,
             fastest: 0,
@@ -1690,7 +1696,7 @@ impl StepContext<'_> {
         };
         for i in range {
             let m = o.to_mesh[i];
-            // SAFETY: particle `i` (mesh vertex `m`) belongs to this block.
+            // SAFETY: particle `i` (mesh vertex `m`) belongs to this group.
             let (p, vel) = unsafe {
                 let (p, vel) = (self.xs.get(i), self.vs.get(i));
                 self.x.set(m as usize, p);
@@ -1707,9 +1713,8 @@ impl StepContext<'_> {
                 h.fastest = m;
             }
         }
-        // SAFETY: slot `block` belongs to this item.
-        unsafe { self.block_health.set(block, h) };
-        self.stretch(block);
+        // SAFETY: slot `group` belongs to this item.
+        unsafe { self.group_health.set(group, h) };
     }
 
     /// Reads the positions of `range` from the mesh-ordered copy and gathers their
