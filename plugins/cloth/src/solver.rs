@@ -1666,8 +1666,8 @@ impl StepContext<'_> {
     }
 
     /// Finishes substep `sub - 1` (if `sub > 0`) and predicts substep `sub` for every chunk of
-    /// particle group `group`; the first substep first reads the positions and the aerodynamic
-    /// forces.
+    /// particle group `group`; the first substep first gathers the aerodynamic forces (the
+    /// positions are read back from the mesh-ordered copy in `step`, and only when edited).
     fn group_particles(&self, sub: u32, group: usize) {
         let o = &self.model.order;
         for c in group_chunks(o, group) {
@@ -1717,8 +1717,7 @@ impl StepContext<'_> {
         unsafe { self.group_health.set(group, h) };
     }
 
-    /// Reads the positions of `range` from the mesh-ordered copy and gathers their
-    /// aerodynamic forces.
+    /// Gathers the aerodynamic forces of the particles of `range` from their triangles'.
     fn load(&self, range: std::ops::Range<usize>) {
         if !self.k.aero {
             return;
