@@ -560,7 +560,7 @@ pub struct ClothSolver {
     solo_steps: u32,
     /// [`Self::prewake`] was called since the last step (the step need not wake them again).
     prewoken: AtomicBool,
-    /// [`Self::run_on_threads`] is running a job on the workers.
+    /// [`Self::share_out`] is running a job on the workers.
     dispatching: AtomicBool,
     /// Steps since the last stalled one (see `SOLO_STEPS`).
     since_stall: u32,
@@ -1101,37 +1101,24 @@ impl ClothSolver {
         }
     }
 
-    /// Runs `job(thread, threads)` once on each of the threads the next step will use (the
-    /// caller's is `thread` 0) and returns when every call has returned: for the work a
-    /// caller does before each step, such as posing the attachment targets and colliders.
-    /// Only workers that are awake are used: while one is still waking (it takes tens of
-    /// microseconds, up to a millisecond here; [`Self::prewake`] starts it), or while steps
-    /// run on the caller's thread alone (after a stall), that is one call, `job(0, 1)`, which
-    /// the waking overlaps; so it is, too, when `job` itself calls this, or another thread
-    /// already does (the workers run one job at a time). Returns the number of threads that
-    /// ran `job`. A panic in `job` panics here (on a worker, as "a cloth worker thread
+    /// Runs `job(k)` once for every `k` in `0..items`, the items claimed one after another by
+    /// the threads the next step will use, and returns when all have run: for the work a
+    /// caller does before or after each step, such as posing the attachment targets and
+    /// colliders. Only workers that are awake are used: while one is still waking (it takes
+    /// tens of microseconds, up to a millisecond here; [`Self::prewake`] starts it), or while
+    /// steps run on the caller's thread alone (after a stall), the caller runs every item,
+    /// which the waking overlaps; so it does, too, when `job` itself calls this, or another
+    /// thread already does (the workers run one job at a time). Returns the number of threads
+    /// that took part. A panic in `job` panics here (on a worker, as "a cloth worker thread
     /// panicked", its own message printed by that thread).
-    pub fn run_on_threads(&self, job: &(dyn Fn(usize, usize) + Sync)) -> usize {
-        let threads = self.pool.threads();
-        if threads > 1
-            && self.solo_steps == 0
-            && self.pool.awake()
-            && !self.dispatching.swap(true, Ordering::Acquire)
-        {
-            /// Lowers the flag however `run` returns.
-            struct Done<'a>(&'a AtomicBool);
-            impl Drop for Done<'_> {
-                fn drop(&mut self) {
-                    self.0.store(false, Ordering::Release);
-                }
-            }
-            let _done = Done(&self.dispatching);
-            self.pool.run(&|thread| job(thread, threads));
-            threads
-        } else {
-            job(0, 1);
-            1
-        }
+    pub fn share_out(&self, items: usize, job: &(dyn Fn(usize) + Sync)) -> usize {
+        share_out(
+            &self.pool,
+            self.solo_steps == 0,
+            &self.dispatching,
+            items,
+            job,
+        )
     }
 
     /// Advances the simulation by `dt` seconds and reports the blow-up guard's verdict.
@@ -1486,7 +1473,7 @@ impl ClothSolver {
 
     /// Interpolates every collider to every substep boundary ([`SweptCollider`]s, substep by
     /// substep) and the attachment targets to every substep's end, the substeps shared out to
-    /// the threads that are awake ([`Self::run_on_threads`]; ~15 µs for the 4,000-particle
+    /// the threads that are awake ([`Self::share_out`]; ~15 µs for the 4,000-particle
     /// dress's 18 colliders and 766 targets on one thread). A substep computes the shapes at
     /// both its ends, so each thread needs only its own; the results do not depend on who
     /// computes them.
@@ -1520,39 +1507,68 @@ impl ClothSolver {
         };
         let swept = SharedSlice::new(&mut self.swept);
         let anchors = SharedSlice::new(&mut self.anchors);
-        let next = AtomicUsize::new(0);
-        let job = || {
-            loop {
-                let sub = next.fetch_add(1, Ordering::Relaxed);
-                if sub >= substeps {
-                    break;
-                }
-                let (t0, t1) = (
-                    sub as f32 / substeps as f32,
-                    (sub + 1) as f32 / substeps as f32,
-                );
-                for collider in 0..count {
-                    let c = SweptCollider::new(
-                        shape_at(collider, t0),
-                        shape_at(collider, t1),
-                        thickness,
-                    );
-                    // SAFETY: substep `sub`'s slots are written by the thread that claimed it
-                    // alone, and read by no one until every thread has returned.
-                    unsafe { swept.set(sub * count + collider, c) };
-                }
-                for (slot, (a, b)) in target_start.iter().zip(target_end).enumerate() {
-                    // SAFETY: as above.
-                    unsafe { anchors.set(sub * attachments + slot, a.lerp(*b, t1)) };
-                }
+        let job = |sub: usize| {
+            let (t0, t1) = (
+                sub as f32 / substeps as f32,
+                (sub + 1) as f32 / substeps as f32,
+            );
+            for collider in 0..count {
+                let c =
+                    SweptCollider::new(shape_at(collider, t0), shape_at(collider, t1), thickness);
+                // SAFETY: substep `sub`'s slots are written by the thread that claimed it
+                // alone, and read by no one until every thread has returned.
+                unsafe { swept.set(sub * count + collider, c) };
+            }
+            for (slot, (a, b)) in target_start.iter().zip(target_end).enumerate() {
+                // SAFETY: as above.
+                unsafe { anchors.set(sub * attachments + slot, a.lerp(*b, t1)) };
             }
         };
-        let threads = self.pool.threads();
-        if threads > 1 && self.solo_steps == 0 && self.pool.awake() {
-            self.pool.run(&|_| job());
-        } else {
-            job();
+        share_out(
+            &self.pool,
+            self.solo_steps == 0,
+            &self.dispatching,
+            substeps,
+            &job,
+        );
+    }
+}
+
+/// [`ClothSolver::share_out`] on `pool` (the workers only if `workers_allowed`; `dispatching`
+/// marks a job on the workers).
+fn share_out(
+    pool: &WorkerPool,
+    workers_allowed: bool,
+    dispatching: &AtomicBool,
+    items: usize,
+    job: &(dyn Fn(usize) + Sync),
+) -> usize {
+    let next = AtomicUsize::new(0);
+    let claim = || {
+        loop {
+            let k = next.fetch_add(1, Ordering::Relaxed);
+            if k >= items {
+                break;
+            }
+            job(k);
         }
+    };
+    let threads = pool.threads();
+    if threads > 1 && workers_allowed && pool.awake() && !dispatching.swap(true, Ordering::Acquire)
+    {
+        /// Lowers the flag however `run` returns.
+        struct Done<'a>(&'a AtomicBool);
+        impl Drop for Done<'_> {
+            fn drop(&mut self) {
+                self.0.store(false, Ordering::Release);
+            }
+        }
+        let _done = Done(dispatching);
+        pool.run(&|_| claim());
+        threads
+    } else {
+        claim();
+        1
     }
 }
 
@@ -3298,11 +3314,11 @@ mod tests {
         ClothSolver::new(&mesh, Fabric::cotton(), &top, settings).expect("a valid cloth")
     }
 
-    /// A caller's job runs once on each thread `run_on_threads` reports, and a call from
-    /// inside a job (the workers are busy with it) runs on that thread alone instead of
-    /// waiting for itself.
+    /// `share_out` runs every item exactly once, on the workers too when they are awake, and
+    /// a call from inside an item (the workers are busy with it) runs its items on that
+    /// thread alone instead of waiting for itself.
     #[test]
-    fn run_on_threads_runs_a_job_once_per_thread_and_a_nested_one_alone() {
+    fn share_out_runs_each_item_once_and_a_nested_call_alone() {
         let mut cloth = skirt_on_two_threads(Vec3::ZERO, 0.3, 0.5);
         let mut on_two = false;
         // Until the worker takes part: a sleeping one is not used, nor any while the steps
@@ -3312,25 +3328,23 @@ mod tests {
             cloth.step(1.0 / 120.0).expect("a valid step");
             for _ in 0..20 {
                 cloth.prewake();
-                let (calls, threads_seen, nested) = (
-                    AtomicUsize::new(0),
-                    AtomicUsize::new(0),
-                    AtomicUsize::new(0),
-                );
-                let used = cloth.run_on_threads(&|thread, threads| {
-                    calls.fetch_add(1, Ordering::Relaxed);
-                    threads_seen.fetch_or(1 << thread, Ordering::Relaxed);
-                    assert!(thread < threads);
-                    let inner = cloth.run_on_threads(&|_, _| {});
-                    nested.fetch_max(inner, Ordering::Relaxed);
+                let runs: Vec<AtomicUsize> = (0..64).map(|_| AtomicUsize::new(0)).collect();
+                let (nested_threads, nested_items) = (AtomicUsize::new(0), AtomicUsize::new(0));
+                let used = cloth.share_out(runs.len(), &|k| {
+                    runs[k].fetch_add(1, Ordering::Relaxed);
+                    let inner = cloth.share_out(3, &|_| {
+                        nested_items.fetch_add(1, Ordering::Relaxed);
+                    });
+                    nested_threads.fetch_max(inner, Ordering::Relaxed);
                 });
-                assert_eq!(calls.load(Ordering::Relaxed), used);
-                assert_eq!(threads_seen.load(Ordering::Relaxed), (1 << used) - 1);
-                assert_eq!(nested.load(Ordering::Relaxed), 1);
+                assert!(runs.iter().all(|r| r.load(Ordering::Relaxed) == 1));
+                assert_eq!(nested_threads.load(Ordering::Relaxed), 1);
+                assert_eq!(nested_items.load(Ordering::Relaxed), 3 * runs.len());
                 if used == 2 {
                     on_two = true;
                     break 'tries;
                 }
+                assert_eq!(used, 1);
             }
         }
         assert!(on_two, "the worker never took part");

@@ -16,7 +16,7 @@
 
 use std::ops::Range;
 use std::sync::Mutex;
-use std::sync::atomic::{AtomicU32, AtomicU64, AtomicUsize, Ordering};
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 use glam::{Affine3A, Vec3};
 use serde::Serialize;
@@ -134,7 +134,8 @@ pub struct GarmentSim {
 }
 
 /// Pieces that skinning the attachment targets is cut into: the solver's threads claim them
-/// one after another, so a thread that wakes late finds the others have done its share.
+/// one after another ([`ClothSolver::share_out`]), so a thread that wakes late finds the
+/// others have done its share.
 const POSE_PIECES: usize = 8;
 
 /// One piece of the attachment targets: the targets, and their runs' bounds
@@ -153,8 +154,6 @@ struct Posing {
     pieces: Vec<Mutex<PosePiece>>,
     /// Per posed collider: its two cuts ([`collider_cuts`]) as `f32` bits.
     cuts: Vec<AtomicU64>,
-    /// The next piece, or collider, to claim.
-    next: AtomicUsize,
     /// What [`GarmentSim::measure_on_threads`] found so far, as `f32` bits.
     deepest: AtomicU32,
     strain: AtomicU32,
@@ -632,28 +631,21 @@ impl GarmentSim {
         let count = self.attached.len();
         // Whole runs of anchors per piece, so that the pieces' runs are the runs of all.
         let piece = count.div_ceil(POSE_PIECES).next_multiple_of(ANCHOR_RUN);
-        let posing = &self.posing;
-        posing.next.store(0, Ordering::Relaxed);
-        let threads = self.solver.run_on_threads(&|_, _| {
-            loop {
-                let k = posing.next.fetch_add(1, Ordering::Relaxed);
-                let Some(slot) = posing.pieces.get(k) else {
-                    break;
-                };
-                let mut guard = slot.lock().unwrap_or_else(|e| e.into_inner());
-                let PosePiece {
-                    targets: piece_targets,
-                    runs: piece_runs,
-                } = &mut *guard;
-                piece_targets.clear();
-                piece_targets.extend(
-                    self.attached[(k * piece).min(count)..((k + 1) * piece).min(count)]
-                        .iter()
-                        .map(|&v| self.skin_point(v as usize, skinning)),
-                );
-                piece_runs.clear();
-                anchor_runs_into(piece_targets, piece_runs);
-            }
+        let pieces = &self.posing.pieces;
+        let threads = self.solver.share_out(pieces.len(), &|k| {
+            let mut guard = pieces[k].lock().unwrap_or_else(|e| e.into_inner());
+            let PosePiece {
+                targets: piece_targets,
+                runs: piece_runs,
+            } = &mut *guard;
+            piece_targets.clear();
+            piece_targets.extend(
+                self.attached[(k * piece).min(count)..((k + 1) * piece).min(count)]
+                    .iter()
+                    .map(|&v| self.skin_point(v as usize, skinning)),
+            );
+            piece_runs.clear();
+            anchor_runs_into(piece_targets, piece_runs);
         });
         targets.clear();
         let runs = &mut self.anchor_runs;
@@ -663,23 +655,16 @@ impl GarmentSim {
             targets.extend_from_slice(&guard.targets);
             runs.extend_from_slice(&guard.runs);
         }
-        let posing = &mut self.posing;
-        if posing.cuts.len() < posed.len() {
-            posing.cuts.resize_with(posed.len(), AtomicU64::default);
+        let cuts = &mut self.posing.cuts;
+        if cuts.len() < posed.len() {
+            cuts.resize_with(posed.len(), AtomicU64::default);
         }
-        posing.next.store(0, Ordering::Relaxed);
-        let (posing, runs, anchors) = (&self.posing, &self.anchor_runs, &targets[..]);
+        let (cuts, runs, anchors) = (&self.posing.cuts, &self.anchor_runs, &targets[..]);
         let colliders = &*posed;
-        self.solver.run_on_threads(&|_, _| {
-            loop {
-                let c = posing.next.fetch_add(1, Ordering::Relaxed);
-                let Some(collider) = colliders.get(c) else {
-                    break;
-                };
-                let (a, b) = collider_cuts(collider, anchors, runs, BODY_SKIN_OFFSET_M);
-                let bits = (u64::from(a.to_bits()) << 32) | u64::from(b.to_bits());
-                posing.cuts[c].store(bits, Ordering::Relaxed);
-            }
+        self.solver.share_out(colliders.len(), &|c| {
+            let (a, b) = collider_cuts(&colliders[c], anchors, runs, BODY_SKIN_OFFSET_M);
+            let bits = (u64::from(a.to_bits()) << 32) | u64::from(b.to_bits());
+            cuts[c].store(bits, Ordering::Relaxed);
         });
         let mut largest = 0.0f32;
         for (collider, bits) in posed.iter_mut().zip(&self.posing.cuts) {
@@ -933,14 +918,13 @@ impl GarmentSim {
     }
 
     /// [`Self::deepest`] and the largest edge stretch ([`Self::max_strain_pct_of`] of every
-    /// edge), the work shared out to the solver's
-    /// threads in pieces (the same results: each is the largest of its pieces'). Besides
-    /// taking half the time, this keeps the workers awake for the next step, as the steps of
-    /// a frame find them when nothing is measured between them.
+    /// edge), the work shared out to the solver's threads in pieces (the same results: each
+    /// is the largest of its pieces'). Besides taking half the time, this keeps the workers
+    /// awake for the next step, as the steps of a frame find them when nothing is measured
+    /// between them.
     fn measure_on_threads(&self, posed: &[(Vec3, Vec3, f32, f32)]) -> (f32, f32) {
         const PIECES: usize = 16;
         let posing = &self.posing;
-        posing.next.store(0, Ordering::Relaxed);
         posing.deepest.store(0, Ordering::Relaxed);
         posing.strain.store(0, Ordering::Relaxed);
         let (particles, edges) = (self.solver.particle_count(), self.edges.len());
@@ -948,22 +932,16 @@ impl GarmentSim {
             let size = count.div_ceil(PIECES);
             (k * size).min(count)..((k + 1) * size).min(count)
         };
-        self.solver.run_on_threads(&|_, _| {
-            loop {
-                let k = posing.next.fetch_add(1, Ordering::Relaxed);
-                if k >= PIECES {
-                    break;
-                }
-                // Both maxima are at least zero and never NaN, and the bits of such floats
-                // order as they do; `+ 0.0` turns a maximum of -0.0 (whose bits would beat
-                // every positive float's) into +0.0.
-                let deepest = self.deepest_of(posed, piece(particles, k)) + 0.0;
-                posing
-                    .deepest
-                    .fetch_max(deepest.to_bits(), Ordering::Relaxed);
-                let strain = self.max_strain_pct_of(piece(edges, k)) + 0.0;
-                posing.strain.fetch_max(strain.to_bits(), Ordering::Relaxed);
-            }
+        self.solver.share_out(PIECES, &|k| {
+            // Both maxima are at least zero and never NaN, and the bits of such floats order
+            // as they do; `+ 0.0` turns a maximum of -0.0 (whose bits would beat every
+            // positive float's) into +0.0.
+            let deepest = self.deepest_of(posed, piece(particles, k)) + 0.0;
+            posing
+                .deepest
+                .fetch_max(deepest.to_bits(), Ordering::Relaxed);
+            let strain = self.max_strain_pct_of(piece(edges, k)) + 0.0;
+            posing.strain.fetch_max(strain.to_bits(), Ordering::Relaxed);
         });
         (
             f32::from_bits(posing.deepest.load(Ordering::Relaxed)),
