@@ -1107,8 +1107,8 @@ impl ClothSolver {
     /// colliders. Only workers that are awake are used: while one is still waking (it takes
     /// tens of microseconds, up to a millisecond here; [`Self::prewake`] starts it), or while
     /// steps run on the caller's thread alone (after a stall), the caller runs every item,
-    /// which the waking overlaps; so it does, too, when `job` itself calls this, or another
-    /// thread already does (the workers run one job at a time). Returns the number of threads
+    /// which the waking overlaps; so it does, too, when a `job` the workers run calls this,
+    /// or another thread already does (the workers run one job at a time). Returns the number of threads
     /// that took part. A panic in `job` panics here (on a worker, as "a cloth worker thread
     /// panicked", its own message printed by that thread).
     pub fn share_out(&self, items: usize, job: &(dyn Fn(usize) + Sync)) -> usize {
@@ -3338,12 +3338,15 @@ mod tests {
                     nested_threads.fetch_max(inner, Ordering::Relaxed);
                 });
                 assert!(runs.iter().all(|r| r.load(Ordering::Relaxed) == 1));
-                assert_eq!(nested_threads.load(Ordering::Relaxed), 1);
                 assert_eq!(nested_items.load(Ordering::Relaxed), 3 * runs.len());
                 if used == 2 {
+                    // The workers were busy with the outer call, so no inner one used them.
+                    assert_eq!(nested_threads.load(Ordering::Relaxed), 1);
                     on_two = true;
                     break 'tries;
                 }
+                // The outer call ran alone (the worker was still waking up); an inner call
+                // may then have found it awake and used it: the items still ran once each.
                 assert_eq!(used, 1);
             }
         }
