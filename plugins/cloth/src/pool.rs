@@ -294,6 +294,8 @@ pub(crate) struct PhaseCounters {
     /// that waits for the whole previous phase.
     dep_range: Vec<Option<(u32, u32)>>,
     deps: Vec<Dep>,
+    /// Per phase: whether its items are pinned to threads ([`Self::pin`]).
+    pinned: Vec<bool>,
     abort: AtomicBool,
 }
 
@@ -310,6 +312,7 @@ impl PhaseCounters {
             done: Vec::new(),
             dep_range: Vec::new(),
             deps: Vec::new(),
+            pinned: Vec::new(),
             abort: AtomicBool::new(false),
         }
     }
@@ -334,6 +337,8 @@ impl PhaseCounters {
         self.dep_range.clear();
         self.dep_range.resize(total, None);
         self.deps.clear();
+        self.pinned.clear();
+        self.pinned.resize(items.len(), false);
         self.clear();
     }
 
@@ -364,6 +369,12 @@ impl PhaseCounters {
             "a dependency of item {k} of phase {p} is not an item of an earlier phase"
         );
         self.dep_range[self.first[p] + k as usize] = Some((a as u32, self.deps.len() as u32));
+    }
+
+    /// Pins the items of phase `p` to threads: of `count` items and `threads` threads, item
+    /// `k` runs on thread `k · threads / count` only (after [`Self::reset`]).
+    pub fn pin(&mut self, p: usize) {
+        self.pinned[p] = true;
     }
 
     /// Whether item `k` of phase `p` may run.
@@ -417,7 +428,15 @@ impl PhaseCounters {
                 let count = items[p] as usize;
                 let flags = &self.claimed[self.first[p]..self.first[p + 1]];
                 let start = thread * count / threads.max(1);
-                for k in (start..count).chain(0..start) {
+                let threads = threads.max(1);
+                let (lo, hi, wrap) = if self.pinned[p] {
+                    // Only the items k with k · threads / count == thread.
+                    let bound = |t: usize| (t * count).div_ceil(threads).min(count);
+                    (bound(thread), bound(thread + 1), 0)
+                } else {
+                    (start, count, start)
+                };
+                for k in (lo..hi).chain(0..wrap) {
                     let flag = &flags[k];
                     if flag.load(Ordering::Relaxed) || !self.ready(items, p, k) {
                         continue;
@@ -652,5 +671,38 @@ mod tests {
             !gave_up.load(Ordering::SeqCst),
             "phase 1 waited for all of phase 0"
         );
+    }
+
+    #[test]
+    fn pinned_items_run_on_their_own_thread_only() {
+        for threads in [1usize, 2, 3] {
+            let pool = WorkerPool::new(threads);
+            let mut counters = PhaseCounters::new();
+            // Phase 1 pinned; its items wait for phase 0's, which any thread may run.
+            let items = [6u32, 5, 4];
+            counters.reset(&items);
+            counters.pin(1);
+            for _round in 0..20 {
+                counters.clear();
+                let ran_on: Vec<AtomicUsize> =
+                    (0..15).map(|_| AtomicUsize::new(usize::MAX)).collect();
+                let first = [0usize, 6, 11];
+                pool.run(&|thread| {
+                    let exec = |p: usize, k: u32| {
+                        ran_on[first[p] + k as usize].store(thread, Ordering::SeqCst);
+                    };
+                    counters.run_phases(thread, threads, &items, &exec);
+                });
+                for k in 0..5 {
+                    // Item k of 5 belongs to thread k · threads / 5.
+                    assert_eq!(
+                        ran_on[6 + k].load(Ordering::SeqCst),
+                        k * threads / 5,
+                        "{threads} threads: pinned item {k}"
+                    );
+                }
+                assert!(ran_on.iter().all(|t| t.load(Ordering::SeqCst) < threads));
+            }
+        }
     }
 }

@@ -592,9 +592,59 @@ impl ClothSolver {
         attached: &[u32],
         settings: SolverSettings,
     ) -> Result<Self, ClothError> {
+        Self::build(mesh, fabric, attached, settings, None)
+    }
+
+    /// As [`Self::new`], with a hint of how a step's work is shared among the vertices:
+    /// `work[v]` (mesh order, finite, not negative) for vertex `v`, in any unit. The solver
+    /// splits the cloth into blocks of equal work for its threads, each thread keeping its
+    /// blocks step after step; without a hint, every free vertex counts 1 and every attached
+    /// one 0. A caller that knows better, such as which vertices lie against a collider and
+    /// will pay for contacts in every substep, passes more for those. The hint changes the
+    /// order in which constraints are solved (the results stay within the solver's accuracy;
+    /// they still do not depend on the number of threads), never what is solved.
+    pub fn new_balanced(
+        mesh: &ClothMesh,
+        fabric: Fabric,
+        attached: &[u32],
+        settings: SolverSettings,
+        work: &[f32],
+    ) -> Result<Self, ClothError> {
+        Self::build(mesh, fabric, attached, settings, Some(work))
+    }
+
+    fn build(
+        mesh: &ClothMesh,
+        fabric: Fabric,
+        attached: &[u32],
+        settings: SolverSettings,
+        work: Option<&[f32]>,
+    ) -> Result<Self, ClothError> {
         fabric.validate()?;
         settings.validate()?;
         let n = mesh.vertex_count();
+        if let Some(work) = work {
+            if work.len() != n {
+                return Err(ClothError::LengthMismatch {
+                    what: "work hints (one per vertex)",
+                    expected: n,
+                    got: work.len(),
+                });
+            }
+            if let Some(index) = work.iter().position(|w| !w.is_finite()) {
+                return Err(ClothError::NonFiniteInput {
+                    what: "work hint of vertex",
+                    index,
+                });
+            }
+            if let Some(&w) = work.iter().find(|&&w| w < 0.0) {
+                return Err(ClothError::InvalidParameter {
+                    what: "a vertex's work hint",
+                    requirement: "0 or more",
+                    value: f64::from(w),
+                });
+            }
+        }
         let mut attach_slot_mesh = vec![u32::MAX; n];
         for (index, &vertex) in attached.iter().enumerate() {
             let slot = attach_slot_mesh.get_mut(vertex as usize).ok_or(
@@ -626,7 +676,15 @@ impl ClothSolver {
             })
             .collect();
         let free: Vec<bool> = inverse_mass_mesh.iter().map(|&w| w > 0.0).collect();
-        let order = ParticleOrder::new(mesh.positions(), &free);
+        let default_work: Vec<f32>;
+        let work = match work {
+            Some(work) => work,
+            None => {
+                default_work = free.iter().map(|&f| f32::from(u8::from(f))).collect();
+                &default_work
+            }
+        };
+        let order = ParticleOrder::weighted(mesh.positions(), &free, work);
         let to_mesh = &order.to_mesh;
         let topology = MeshTopology::new(mesh);
         let constraints = ConstraintSet::build(
@@ -1323,6 +1381,13 @@ impl ClothSolver {
     /// order these dependencies keep: the results do not change.
     fn set_dependencies(&mut self) {
         let blocks = self.model.order.blocks();
+        // With a few blocks per thread, each thread keeps its own blocks and their particle
+        // groups, substep after substep, and their particles stay in its core's cache (taken
+        // by whichever thread was free, a block's particles moved between the cores in half
+        // of the substeps: the 4,000-particle dress stepped 5-9 % slower). With many, the
+        // threads share them out as they come free, which balances uneven blocks (pinned,
+        // 64k particles in 64 blocks stepped 6 % slower).
+        let pin = blocks <= 2 * self.pool.threads();
         let reach = &self.model.reach;
         let counters = &mut self.counters;
         let mut aero = None;
@@ -1354,11 +1419,17 @@ impl ClothSolver {
                         }
                         counters.set_deps(p, g as u32, deps.iter().copied());
                     }
+                    if pin {
+                        counters.pin(p);
+                    }
                 }
                 Phase::Block { .. } => {
                     for x in 0..blocks {
                         let groups = x * PARTICLE_GROUPS..(x + 1) * PARTICLE_GROUPS;
                         counters.set_deps(p, x as u32, groups.map(|g| Dep::Item(pu - 1, g as u32)));
+                    }
+                    if pin {
+                        counters.pin(p);
                     }
                     last_block = Some(pu);
                     separators.clear();
@@ -1374,6 +1445,9 @@ impl ClothSolver {
                             counters.set_deps(p, g as u32, deps.iter().copied());
                         }
                     }
+                    if pin {
+                        counters.pin(p);
+                    }
                 }
                 Phase::BlockIteration => {
                     for x in 0..blocks {
@@ -1383,6 +1457,9 @@ impl ClothSolver {
                             group_deps(&mut deps, g, &separators);
                         }
                         counters.set_deps(p, x as u32, deps.iter().copied());
+                    }
+                    if pin {
+                        counters.pin(p);
                     }
                     last_block = Some(pu);
                     separators.clear();
@@ -3351,6 +3428,57 @@ mod tests {
             }
         }
         assert!(on_two, "the worker never took part");
+    }
+
+    #[test]
+    fn work_hints_are_checked_and_keep_results_independent_of_threads() {
+        let mesh = ClothMesh::cylinder(Vec3::ZERO, 0.3, 0.5, 40, 30).expect("a valid skirt");
+        let top: Vec<u32> = ClothMesh::cylinder_ring(40, 30).collect();
+        let n = mesh.vertex_count();
+        let build = |work: &[f32], threads: usize| {
+            let settings = SolverSettings {
+                threads,
+                ..SolverSettings::default()
+            };
+            ClothSolver::new_balanced(&mesh, Fabric::cotton(), &top, settings, work)
+        };
+        let err = |work: &[f32]| build(work, 1).err().map(|e| e.to_string());
+        assert_eq!(
+            err(&vec![1.0; n - 1]),
+            Some(format!(
+                "expected {n} work hints (one per vertex), got {}",
+                n - 1
+            ))
+        );
+        let mut work = vec![1.0; n];
+        work[7] = f32::NAN;
+        assert!(err(&work).is_some_and(|e| e.contains("work hint of vertex 7")));
+        work[7] = -1.0;
+        assert!(err(&work).is_some_and(|e| e.contains("0 or more")));
+        // The particles on one side (x < 0) three times the work: a different split of the
+        // blocks, the same bits on one thread and two.
+        let work: Vec<f32> = mesh
+            .positions()
+            .iter()
+            .map(|p| if p.x < 0.0 { 3.0 } else { 1.0 })
+            .collect();
+        let run = |threads: usize| {
+            let mut cloth = build(&work, threads).expect("a valid cloth");
+            let ball = [Sphere::new(Vec3::new(0.05, 0.2, 0.0), 0.31)];
+            cloth.set_colliders(&ball, &[]).expect("a valid collider");
+            for _ in 0..30 {
+                cloth.step(1.0 / 120.0).expect("a valid step");
+            }
+            position_bits(&cloth)
+        };
+        assert_eq!(run(1), run(2));
+        let plain = ClothSolver::new(&mesh, Fabric::cotton(), &top, SolverSettings::default())
+            .expect("a valid cloth");
+        let hinted = build(&work, 2).expect("a valid cloth");
+        assert_ne!(
+            plain.model.order.block_start, hinted.model.order.block_start,
+            "the hint did not move the split"
+        );
     }
 
     /// The cloth's positions as bits, for comparisons that must be exact.
