@@ -451,6 +451,34 @@ fn nearest(points: &[Vec3], queries: &[Vec3]) -> Vec<usize> {
         .collect()
 }
 
+/// Free vertices nearer than this to a collider in the rest pose are "near" for [`work_hints`].
+const NEAR_BODY_M: f32 = 0.03;
+/// The extra work of a near vertex, in units of a free vertex's.
+const NEAR_EXTRA_WORK: f32 = 1.0;
+
+/// Each vertex's share of a step's work, for the solver's split of the garment between its
+/// threads ([`ClothSolver::new_balanced`]): 0 for an attached vertex, 1 for a free one, and
+/// more for a free one lying against the body at rest, which will be tested against colliders
+/// and pushed out in most substeps.
+fn work_hints(positions: &[Vec3], attached: &[u32], colliders: &BodyColliders) -> Vec<f32> {
+    let mut work: Vec<f32> = positions
+        .iter()
+        .map(|&p| {
+            if colliders.signed_distance(p) < NEAR_BODY_M {
+                1.0 + NEAR_EXTRA_WORK
+            } else {
+                1.0
+            }
+        })
+        .collect();
+    for &v in attached {
+        if let Some(w) = work.get_mut(v as usize) {
+            *w = 0.0;
+        }
+    }
+    work
+}
+
 impl GarmentSim {
     /// A garment on the body with these (shaped) positions and rest pose.
     pub fn new(
@@ -465,7 +493,6 @@ impl GarmentSim {
             collision_thickness: settings.collision_thickness.max(BODY_SKIN_OFFSET_M),
             ..settings
         };
-        let solver = ClothSolver::new(&mesh, garment.fabric, &garment.attached, settings)?;
         let mut colliders =
             BodyColliders::fit(model, body_positions, rest, &ColliderOptions::default())?;
         for name in &garment.ignore_colliders {
@@ -476,6 +503,9 @@ impl GarmentSim {
         colliders
             .capsules
             .retain(|c| !garment.ignore_colliders.iter().any(|n| n == c.name));
+        let work = work_hints(&garment.positions, &garment.attached, &colliders);
+        let solver =
+            ClothSolver::new_balanced(&mesh, garment.fabric, &garment.attached, settings, &work)?;
         // Every vertex takes the skin of its nearest body vertex, smoothed over the garment's
         // mesh (a sleeve's armpit edge would otherwise be torn between the arm and the chest in
         // a pose): the attached ones follow the body with it, and a reset puts the whole garment
