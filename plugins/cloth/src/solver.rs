@@ -1381,13 +1381,14 @@ impl ClothSolver {
     /// order these dependencies keep: the results do not change.
     fn set_dependencies(&mut self) {
         let blocks = self.model.order.blocks();
-        // With a few blocks per thread, each thread keeps its own blocks and their particle
-        // groups, substep after substep, and their particles stay in its core's cache (taken
-        // by whichever thread was free, a block's particles moved between the cores in half
-        // of the substeps: the 4,000-particle dress stepped 5-9 % slower). With many, the
-        // threads share them out as they come free, which balances uneven blocks (pinned,
-        // 64k particles in 64 blocks stepped 6 % slower).
-        let pin = blocks <= 2 * self.pool.threads();
+        // With a block per thread, each thread keeps its own block and its particle groups,
+        // substep after substep, and their particles stay in its core's cache (taken by
+        // whichever thread was free, a block's particles moved between the cores in half of
+        // the substeps: the 4,000-particle dress stepped 5-9 % slower). With more blocks, the
+        // threads share them out as they come free, which balances blocks of uneven work
+        // (pinned two to a thread, the 4,096-particle tube among 28 colliders stepped 6-20 %
+        // slower).
+        let pin = blocks <= self.pool.threads();
         let reach = &self.model.reach;
         let counters = &mut self.counters;
         let mut aero = None;
