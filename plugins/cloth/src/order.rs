@@ -69,15 +69,14 @@ impl ParticleOrder {
     /// is free (not attached), for balancing the blocks by free particles.
     #[cfg(test)]
     pub fn new(rest: &[Vec3], free: &[bool]) -> Self {
-        let work: Vec<f32> = free.iter().map(|&f| f32::from(u8::from(f))).collect();
-        Self::weighted(rest, free, &work)
+        Self::weighted(rest, free, None)
     }
 
-    /// As [`Self::new`], the blocks balanced by `work[v]` (each vertex's share of a step's
-    /// work, finite and not negative) instead of by free particles.
-    pub fn weighted(rest: &[Vec3], free: &[bool], work: &[f32]) -> Self {
+    /// As [`Self::new`]; with `work`, the blocks are balanced by `work[v]` (each vertex's
+    /// share of a step's work, finite and not negative) instead of by free particles.
+    pub fn weighted(rest: &[Vec3], free: &[bool], work: Option<&[f32]>) -> Self {
         debug_assert_eq!(rest.len(), free.len());
-        debug_assert_eq!(rest.len(), work.len());
+        debug_assert!(work.is_none_or(|w| w.len() == rest.len()));
         let n = rest.len();
         let mut depth = u32::from(n >= BLOCK_MIN);
         while (n >> (depth + 1)) >= BLOCK_TARGET && depth < 12 {
@@ -127,7 +126,7 @@ impl ParticleOrder {
 
 #[allow(clippy::too_many_arguments)]
 fn bisect(
-    (rest, free, work): (&[Vec3], &[bool], &[f32]),
+    (rest, free, work): (&[Vec3], &[bool], Option<&[f32]>),
     ids: &mut [u32],
     offset: u32,
     level: u32,
@@ -182,7 +181,10 @@ fn bisect(
             ids.select_nth_unstable_by(half, along);
         }
         // In f64: sums of many f32 weights, compared for balance.
-        let weight = |v: &u32| f64::from(work[*v as usize]);
+        let weight = |v: &u32| match work {
+            Some(work) => f64::from(work[*v as usize]),
+            None => f64::from(u8::from(free[*v as usize])),
+        };
         let total: f64 = ids.iter().map(weight).sum();
         let left: f64 = ids[..half].iter().map(weight).sum();
         if (2.0 * left - total).abs() <= total / 8.0 {
@@ -396,7 +398,7 @@ mod tests {
         let work: Vec<f32> = (0..64 * 64)
             .map(|k| if k / 64 < 16 { 3.0 } else { 1.0 })
             .collect();
-        let order = ParticleOrder::weighted(&rest, &free, &work);
+        let order = ParticleOrder::weighted(&rest, &free, Some(&work));
         let sizes = block_sizes(&order);
         assert_eq!(sizes.iter().sum::<u32>(), 64 * 64);
         assert_eq!(sizes, [512, 512, 1536, 1536]);

@@ -427,13 +427,13 @@ impl PhaseCounters {
             'scan: for p in cursor..items.len().min(cursor + LOOKAHEAD) {
                 let count = items[p] as usize;
                 let flags = &self.claimed[self.first[p]..self.first[p + 1]];
-                let start = thread * count / threads.max(1);
                 let threads = threads.max(1);
                 let (lo, hi, wrap) = if self.pinned[p] {
                     // Only the items k with k · threads / count == thread.
                     let bound = |t: usize| (t * count).div_ceil(threads).min(count);
                     (bound(thread), bound(thread + 1), 0)
                 } else {
+                    let start = thread * count / threads;
                     (start, count, start)
                 };
                 for k in (lo..hi).chain(0..wrap) {

@@ -676,14 +676,6 @@ impl ClothSolver {
             })
             .collect();
         let free: Vec<bool> = inverse_mass_mesh.iter().map(|&w| w > 0.0).collect();
-        let default_work: Vec<f32>;
-        let work = match work {
-            Some(work) => work,
-            None => {
-                default_work = free.iter().map(|&f| f32::from(u8::from(f))).collect();
-                &default_work
-            }
-        };
         let order = ParticleOrder::weighted(mesh.positions(), &free, work);
         let to_mesh = &order.to_mesh;
         let topology = MeshTopology::new(mesh);
@@ -1420,17 +1412,11 @@ impl ClothSolver {
                         }
                         counters.set_deps(p, g as u32, deps.iter().copied());
                     }
-                    if pin {
-                        counters.pin(p);
-                    }
                 }
                 Phase::Block { .. } => {
                     for x in 0..blocks {
                         let groups = x * PARTICLE_GROUPS..(x + 1) * PARTICLE_GROUPS;
                         counters.set_deps(p, x as u32, groups.map(|g| Dep::Item(pu - 1, g as u32)));
-                    }
-                    if pin {
-                        counters.pin(p);
                     }
                     last_block = Some(pu);
                     separators.clear();
@@ -1446,9 +1432,6 @@ impl ClothSolver {
                             counters.set_deps(p, g as u32, deps.iter().copied());
                         }
                     }
-                    if pin {
-                        counters.pin(p);
-                    }
                 }
                 Phase::BlockIteration => {
                     for x in 0..blocks {
@@ -1458,9 +1441,6 @@ impl ClothSolver {
                             group_deps(&mut deps, g, &separators);
                         }
                         counters.set_deps(p, x as u32, deps.iter().copied());
-                    }
-                    if pin {
-                        counters.pin(p);
                     }
                     last_block = Some(pu);
                     separators.clear();
@@ -1486,6 +1466,17 @@ impl ClothSolver {
                 }
                 // After every group's finish (the phase before).
                 Phase::Stretch => {}
+            }
+            // Per block or per particle group: pinned to the block's thread.
+            let per_block = matches!(
+                phase,
+                Phase::Particles { .. }
+                    | Phase::Block { .. }
+                    | Phase::BlockIteration
+                    | Phase::Finish
+            );
+            if pin && per_block {
+                counters.pin(p);
             }
         }
     }

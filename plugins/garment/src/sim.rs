@@ -643,9 +643,10 @@ impl GarmentSim {
     }
 
     fn anchors(&self, skinning: &[Affine3A]) -> Vec<Vec3> {
-        let mut out = Vec::with_capacity(self.attached.len());
-        self.anchors_into(skinning, &mut out);
-        out
+        self.attached
+            .iter()
+            .map(|&v| self.skin_point(v as usize, skinning))
+            .collect()
     }
 
     /// [`Self::anchors`] into `targets` and the `posed` colliders fitted to them
@@ -706,16 +707,6 @@ impl GarmentSim {
             largest = largest.max(apply_cuts(collider, cuts));
         }
         (largest, threads)
-    }
-
-    /// [`Self::anchors`] into `out` (cleared first).
-    fn anchors_into(&self, skinning: &[Affine3A], out: &mut Vec<Vec3>) {
-        out.clear();
-        out.extend(
-            self.attached
-                .iter()
-                .map(|&v| self.skin_point(v as usize, skinning)),
-        );
     }
 
     /// Puts the garment on the body posed by `skinning`, at rest.
