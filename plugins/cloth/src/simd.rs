@@ -9,10 +9,14 @@
 //!
 //! The kernels are written once over the `Lanes` trait and compiled twice: with two SSE2
 //! registers per batch (the x86-64 baseline; plain arrays on other architectures) and with
-//! one AVX register, chosen at run time (`Isa::detect`). Only IEEE-754 additions,
-//! multiplications, divisions and square roots are used — no fused multiply-add, no
+//! one AVX register (with FMA), chosen at run time (`Isa::detect`). Only IEEE-754 additions,
+//! multiplications, fused multiply-adds, divisions and square roots are used — no
 //! approximate reciprocals — each rounded exactly once, so every implementation gives the
-//! same bits. The baseline's eight lanes are two four-lane SSE2 halves (`F4`).
+//! same bits: the AVX kernels fuse with the processor's FMA instructions, the baseline lane
+//! by lane with `f32::mul_add` (slower, but only processors without AVX and FMA run it).
+//! (Fused multiply-add was tried in session 4 and dropped because the baseline rounded twice;
+//! rounding once there too keeps the kernels' bit-for-bit agreement.) The baseline's eight
+//! lanes are two four-lane SSE2 halves (`F4`).
 
 use std::ops::{Add, Mul, Neg, Sub};
 
@@ -363,6 +367,8 @@ pub(crate) trait Lanes:
     fn to_array(self) -> [f32; LANES];
     fn div(self, o: Self) -> Self;
     fn sqrt(self) -> Self;
+    /// `self · a + b`, rounded once (a fused multiply-add).
+    fn mul_add(self, a: Self, b: Self) -> Self;
     /// `!(self < o)` (true when either is NaN).
     fn not_lt(self, o: Self) -> Self;
     /// `self > o` (false when either is NaN).
@@ -437,6 +443,21 @@ impl<L: Lanes> V3<L> {
     #[inline(always)]
     pub fn dot(self, o: Self) -> L {
         self.x * o.x + self.y * o.y + self.z * o.z
+    }
+    /// `self · s + c` per component, each rounded once.
+    #[inline(always)]
+    pub fn mul_add(self, s: L, c: Self) -> Self {
+        V3 {
+            x: self.x.mul_add(s, c.x),
+            y: self.y.mul_add(s, c.y),
+            z: self.z.mul_add(s, c.z),
+        }
+    }
+    /// The dot product with fused multiply-adds (`x·x' + (y·y' + z·z')`, two roundings
+    /// fewer).
+    #[inline(always)]
+    pub fn dot_fused(self, o: Self) -> L {
+        self.x.mul_add(o.x, self.y.mul_add(o.y, self.z * o.z))
     }
     #[inline(always)]
     pub fn cross(self, o: Self) -> Self {
@@ -600,6 +621,12 @@ mod x86 {
             Sse8(self.0.div(o.0), self.1.div(o.1))
         }
         #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            // Without FMA in the baseline, lane by lane (`f32::mul_add` rounds once).
+            let (s, a, b) = (self.to_array(), a.to_array(), b.to_array());
+            Self::load(&std::array::from_fn(|l| s[l].mul_add(a[l], b[l])))
+        }
+        #[inline(always)]
         fn sqrt(self) -> Self {
             Sse8(self.0.sqrt(), self.1.sqrt())
         }
@@ -723,6 +750,11 @@ mod x86 {
         #[inline(always)]
         fn div(self, o: Self) -> Self {
             Avx8(unsafe { _mm256_div_ps(self.0, o.0) })
+        }
+        #[inline(always)]
+        fn mul_add(self, a: Self, b: Self) -> Self {
+            // SAFETY: FMA is available too (see `Isa::Avx`).
+            Avx8(unsafe { _mm256_fmadd_ps(self.0, a.0, b.0) })
         }
         #[inline(always)]
         fn sqrt(self) -> Self {
@@ -865,6 +897,9 @@ impl Lanes for Scalar8 {
     fn div(self, o: Self) -> Self {
         self.zip(o, |a, b| a / b)
     }
+    fn mul_add(self, a: Self, b: Self) -> Self {
+        Scalar8(std::array::from_fn(|l| self.0[l].mul_add(a.0[l], b.0[l])))
+    }
     fn sqrt(self) -> Self {
         Scalar8(self.0.map(f32::sqrt))
     }
@@ -925,7 +960,7 @@ impl Lanes for Scalar8 {
 pub(crate) enum Isa {
     /// Two SSE registers per eight lanes (or plain arrays off x86-64).
     Baseline,
-    /// One AVX register per eight lanes.
+    /// One AVX register per eight lanes, with FMA (every AVX2 processor has both).
     Avx,
 }
 
@@ -933,7 +968,8 @@ impl Isa {
     /// The best one this processor has.
     pub fn detect() -> Self {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") {
+        if std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("fma")
+        {
             return Isa::Avx;
         }
         Isa::Baseline
@@ -948,7 +984,7 @@ impl Isa {
 macro_rules! dispatch_lanes {
     ($isa:expr, $kernel:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?) => {{
         #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx")]
+        #[target_feature(enable = "avx,fma")]
         unsafe fn avx($($arg: $ty),*) $(-> $ret)? {
             // SAFETY: the caller's contract.
             unsafe { $kernel::<$crate::simd::Avx8>($($arg),*) }
