@@ -329,9 +329,53 @@ struct Model {
     /// Attached mesh vertices, in the order of the targets.
     attached: Vec<u32>,
     attach_slot: Vec<u32>,
+    /// Per particle `i`: which eight-particle paths the particles `i..i + 8` may take
+    /// ([`EIGHT_FREE`], [`EIGHT_ATTACHED`], [`EIGHT_TWO_TETHERS`]); none where fewer than
+    /// eight particles are left. Checked once here, not every substep.
+    eight: Vec<u8>,
     fabric: Fabric,
     settings: SolverSettings,
     reach: SeparatorReach,
+}
+
+/// [`Model::eight`]: all eight particles are free.
+const EIGHT_FREE: u8 = 1;
+/// [`Model::eight`]: all eight particles are attached.
+const EIGHT_ATTACHED: u8 = 2;
+/// [`Model::eight`]: all eight particles have exactly two tethers.
+const EIGHT_TWO_TETHERS: u8 = 4;
+
+/// [`Model::eight`] from the solver-ordered inverse masses and tether lists.
+fn eight_flags(inverse_mass: &[f32], tether_start: &[u32]) -> Vec<u8> {
+    let n = inverse_mass.len();
+    (0..n)
+        .map(|i| {
+            if i + LANES > n {
+                return 0;
+            }
+            let w = &inverse_mass[i..i + LANES];
+            let mut flags = 0;
+            if w.iter().all(|&w| w > 0.0) {
+                flags |= EIGHT_FREE;
+            }
+            if w.iter().all(|&w| w == 0.0) {
+                flags |= EIGHT_ATTACHED;
+            }
+            if (i..i + LANES).all(|i| tether_start[i + 1] - tether_start[i] == 2) {
+                flags |= EIGHT_TWO_TETHERS;
+            }
+            flags
+        })
+        .collect()
+}
+
+impl Model {
+    /// [`Model::eight`] at particle `i` of a range that ends at `end`: none if fewer than
+    /// eight particles are left in the range.
+    #[inline]
+    fn eight_at(&self, i: usize, end: usize) -> u8 {
+        if i + LANES <= end { self.eight[i] } else { 0 }
+    }
 }
 
 /// Lists of `u32` in one array (`start` has one entry per list, and the total last).
@@ -750,6 +794,7 @@ impl ClothSolver {
             }
         }
 
+        let eight = eight_flags(&inverse_mass, &tether_start);
         let x: Vec<Vec3A> = mesh.positions().iter().map(|&p| p.into()).collect();
         let mut xs: Vec<Vec3A> = to_mesh.iter().map(|&m| x[m as usize]).collect();
         xs.resize(n + constraints.padding_particles(), Vec3A::ZERO);
@@ -776,6 +821,7 @@ impl ClothSolver {
                 tether_limit,
                 attached: attached.to_vec(),
                 attach_slot,
+                eight,
                 fabric,
                 settings,
                 reach,
@@ -1938,10 +1984,8 @@ impl StepContext<'_> {
         let fast = finish.is_some() && predict.is_some();
         let mut i = range.start;
         while i < range.end {
-            if fast
-                && i + LANES <= range.end
-                && m.inverse_mass[i..i + LANES].iter().all(|&w| w > 0.0)
-            {
+            let flags = m.eight_at(i, range.end);
+            if fast && flags & EIGHT_FREE != 0 {
                 // SAFETY: particles `i..i + 8` belong to this item.
                 unsafe {
                     integrate_free(
@@ -1955,8 +1999,7 @@ impl StepContext<'_> {
                 continue;
             }
             if let Some(sub) = predict
-                && i + LANES <= range.end
-                && m.inverse_mass[i..i + LANES].iter().all(|&w| w == 0.0)
+                && flags & EIGHT_ATTACHED != 0
                 && m.attach_slot[i..i + LANES]
                     .iter()
                     .all(|&slot| (slot as usize) < self.target_start.len())
@@ -2029,8 +2072,8 @@ impl StepContext<'_> {
         // targets and colliders are read-only.
         let mut i = range.start;
         while i < range.end {
-            let two = |i: usize| m.tether_start[i + 1] - m.tether_start[i] == 2;
-            if i + LANES <= range.end && (i..i + LANES).all(two) {
+            let flags = m.eight_at(i, range.end);
+            if flags & EIGHT_TWO_TETHERS != 0 {
                 // SAFETY: particles `i..i + 8` belong to this item.
                 unsafe { self.tethers8(i, sub) };
                 // The group's bounds as a tree (short dependency chains).
@@ -2054,6 +2097,11 @@ impl StepContext<'_> {
                 ];
                 low = low.min(lo[0].min(lo[1]).min(lo[2].min(lo[3])));
                 high = high.max(hi[0].max(hi[1]).max(hi[2].max(hi[3])));
+                i += LANES;
+                continue;
+            }
+            if flags & EIGHT_ATTACHED != 0 {
+                // No tethers, no bounds.
                 i += LANES;
                 continue;
             }
@@ -2150,9 +2198,8 @@ impl StepContext<'_> {
         while i < range.end {
             // Eight free particles: collided together, each collider with the lanes its box
             // meets; only what the eight-particle passes leave open is done one by one.
-            let eight =
-                i + LANES <= range.end && m.inverse_mass[i..i + LANES].iter().all(|&w| w > 0.0);
-            if group && eight {
+            let flags = m.eight_at(i, range.end);
+            if group && flags & EIGHT_FREE != 0 {
                 // SAFETY: particles `i..i + 8` belong to this item.
                 match unsafe { self.collide_group(i, &scene, second, &mut pass) } {
                     Some((moved, again)) if scene.any_plane => {
@@ -2204,6 +2251,11 @@ impl StepContext<'_> {
                         }
                     }
                 }
+                i += LANES;
+                continue;
+            }
+            if flags & EIGHT_ATTACHED != 0 {
+                // Not collided.
                 i += LANES;
                 continue;
             }
@@ -3046,6 +3098,38 @@ unsafe fn integrate_free_with<L: Lanes>(
 
 #[cfg(test)]
 mod tests {
+    #[test]
+    fn eight_flags_mark_runs_of_free_attached_and_two_tether_particles() {
+        // 20 particles: 0..4 attached, 4..20 free; free ones have two tethers but 15 (one).
+        let inverse_mass: Vec<f32> = (0..20).map(|i| if i < 4 { 0.0 } else { 2.0 }).collect();
+        let mut tether_start = vec![0u32];
+        for i in 0..20u32 {
+            let count = match i {
+                0..4 => 0,
+                15 => 1,
+                _ => 2,
+            };
+            tether_start.push(tether_start[i as usize] + count);
+        }
+        let flags = eight_flags(&inverse_mass, &tether_start);
+        assert_eq!(flags.len(), 20);
+        // Independently: each window checked particle by particle.
+        for (i, &f) in flags.iter().enumerate() {
+            let window: Vec<usize> = (i..i + 8).filter(|&j| j < 20).collect();
+            let full = window.len() == 8;
+            let free = full && window.iter().all(|&j| j >= 4);
+            let attached = full && window.iter().all(|&j| j < 4);
+            let two = full && window.iter().all(|&j| j >= 4 && j != 15);
+            assert_eq!(f & EIGHT_FREE != 0, free, "free at {i}");
+            assert_eq!(f & EIGHT_ATTACHED != 0, attached, "attached at {i}");
+            assert_eq!(f & EIGHT_TWO_TETHERS != 0, two, "two tethers at {i}");
+        }
+        assert_eq!(flags[4], EIGHT_FREE | EIGHT_TWO_TETHERS);
+        assert_eq!(flags[8], EIGHT_FREE);
+        assert_eq!(flags[12], EIGHT_FREE);
+        assert_eq!(flags[13], 0);
+    }
+
     #[test]
     fn clear_two_finds_the_smallest_move_out_of_two_half_spaces() {
         // Independent check: the smallest move out of two half-spaces, by brute force over a
