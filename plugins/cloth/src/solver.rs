@@ -321,6 +321,10 @@ struct Model {
     /// Triangles around each particle.
     vertex_triangles_start: Vec<u32>,
     vertex_triangles: Vec<u32>,
+    /// Per particle: its first eight triangles, padded with `triangles.len()` (a slot of the
+    /// triangle forces that stays zero), so that [`StepContext::load`] adds a fixed eight
+    /// without a data-dependent loop; more than eight (rare) are added one by one.
+    vertex_triangles8: Vec<[u32; LANES]>,
     constraints: ConstraintSet,
     tether_start: Vec<u32>,
     tether_slot: Vec<u32>,
@@ -794,6 +798,13 @@ impl ClothSolver {
             }
         }
 
+        let vertex_triangles8 = (0..n)
+            .map(|i| {
+                let around = &vertex_triangles
+                    [vertex_triangles_start[i] as usize..vertex_triangles_start[i + 1] as usize];
+                std::array::from_fn(|k| around.get(k).copied().unwrap_or(triangles.len() as u32))
+            })
+            .collect();
         let eight = eight_flags(&inverse_mass, &tether_start);
         let x: Vec<Vec3A> = mesh.positions().iter().map(|&p| p.into()).collect();
         let mut xs: Vec<Vec3A> = to_mesh.iter().map(|&m| x[m as usize]).collect();
@@ -814,6 +825,7 @@ impl ClothSolver {
                 triangles,
                 vertex_triangles_start,
                 vertex_triangles,
+                vertex_triangles8,
                 constraints,
                 tether_start,
                 tether_slot,
@@ -834,7 +846,8 @@ impl ClothSolver {
             x,
             external: vec![Vec3A::ZERO; n],
             external_dirty: false,
-            triangle_force: vec![Vec3A::ZERO; mesh.triangles().len()],
+            // One more than the triangles: the zero that pads `vertex_triangles8`.
+            triangle_force: vec![Vec3A::ZERO; mesh.triangles().len() + 1],
             distance_lambda: vec![[0.0; LANES]; if keep_lambda { distance_batches } else { 0 }],
             bend_lambda: vec![[[0.0; LANES]; 5]; if keep_lambda { bend_batches } else { 0 }],
             distance_inverse: Vec::new(),
@@ -1858,11 +1871,17 @@ impl StepContext<'_> {
             let w = m.inverse_mass[i];
             let mut sum = Vec3A::ZERO;
             if w > 0.0 {
-                for &t in &m.vertex_triangles
-                    [m.vertex_triangles_start[i] as usize..m.vertex_triangles_start[i + 1] as usize]
+                // SAFETY (both blocks): the triangle forces are only read in this phase.
+                let f = |t: u32| unsafe { self.triangle_force.get(t as usize) };
+                // A tree of eight (short dependency chains, no branch on the count).
+                let t = &m.vertex_triangles8[i];
+                sum = ((f(t[0]) + f(t[1])) + (f(t[2]) + f(t[3])))
+                    + ((f(t[4]) + f(t[5])) + (f(t[6]) + f(t[7])));
+                let (start, end) = (m.vertex_triangles_start[i], m.vertex_triangles_start[i + 1]);
+                for &t in
+                    &m.vertex_triangles[(start as usize + LANES).min(end as usize)..end as usize]
                 {
-                    // SAFETY: the triangle forces are only read in this phase.
-                    sum += unsafe { self.triangle_force.get(t as usize) };
+                    sum += f(t);
                 }
             }
             // SAFETY: particle `i` belongs to this item.
