@@ -2355,8 +2355,12 @@ impl StepContext<'_> {
     /// path at the start of that pass (the box tested against each collider's bounds): the
     /// shapes after the last mover tested it where it still is, or their bounds missed a box
     /// that holds its new path, and a shape leaves a particle it moved on its skin, where it
-    /// does not move it again (`CONTACT_TOLERANCE`). Otherwise, and in a third pass, every
-    /// shape is tested.
+    /// does not move it again (`CONTACT_TOLERANCE`). Once a shape moves it in that pass, the
+    /// shapes after that one are all tested too: they have not seen it where it now is (a
+    /// pass that stopped at the last mover anyway left those moves to the third pass, and
+    /// differed from testing every shape: session 13, found when a different block split
+    /// moved a skirt's particles between the one-particle and the grouped path). Otherwise,
+    /// and in a third pass, every shape is tested.
     ///
     /// # Safety
     /// Particle `i` belongs to the calling item.
@@ -2374,7 +2378,8 @@ impl StepContext<'_> {
         let collider_count = scene.near.map_or(colliders.len(), <[u16]>::len);
         let mut touched = resume == Resume::ThirdPass;
         let mut settled = true;
-        // Shapes (colliders, then planes) this pass tests: those before `limit`.
+        // Shapes (colliders, then planes) this pass tests: those before `limit`, and every one
+        // after a shape has moved the particle in this pass.
         let mut limit = usize::MAX;
         // SAFETY: the caller's contract (the particle's position before the first pass).
         let before = unsafe { self.xs.get(i) };
@@ -2390,6 +2395,9 @@ impl StepContext<'_> {
                 _ => {
                     let (seg_low, seg_high) = (start.min(p), start.max(p));
                     let mut test = |place: usize, collider: &SweptCollider| {
+                        if place >= limit && last.is_none() {
+                            return;
+                        }
                         if collider.overlaps(seg_low, seg_high) {
                             let (q, hit) = collider.collide(start, p, k.thickness, k.friction);
                             if hit {
@@ -2398,13 +2406,12 @@ impl StepContext<'_> {
                             }
                         }
                     };
-                    let n = collider_count.min(limit);
                     match scene.near {
-                        None => colliders[..n]
+                        None => colliders[..collider_count]
                             .iter()
                             .enumerate()
                             .for_each(|(c, s)| test(c, s)),
-                        Some(near) => near[..n]
+                        Some(near) => near
                             .iter()
                             .enumerate()
                             .for_each(|(c, &s)| test(c, &colliders[s as usize])),
@@ -2412,19 +2419,22 @@ impl StepContext<'_> {
                 }
             }
             let mut test_plane = |place: usize, plane: &Plane| {
+                if collider_count + place >= limit && last.is_none() {
+                    return;
+                }
                 let q = collide_plane(plane, start, p, k.thickness, k.friction);
                 if q != p {
                     p = q;
                     last = Some(collider_count + place);
                 }
             };
-            let n = limit.saturating_sub(collider_count);
             match scene.planes {
-                None => self.planes[..n.min(self.planes.len())]
+                None => self
+                    .planes
                     .iter()
                     .enumerate()
                     .for_each(|(c, plane)| test_plane(c, plane)),
-                Some(near) => near[..n.min(near.len())]
+                Some(near) => near
                     .iter()
                     .enumerate()
                     .for_each(|(c, &plane)| test_plane(c, &self.planes[plane as usize])),
@@ -2628,8 +2638,8 @@ impl Scene<'_> {
 /// substep start, `now`: now, both eight consecutive particles), made together in lanes as
 /// [`StepContext::collide_particle`] makes them for each particle: the first pass, and if
 /// `second`, the second one for the lanes the first moved (`prune`: testing only the
-/// colliders before the last mover of a particle that stayed within its box; tests turn it
-/// off). A collider tests the lanes whose path box meets its own. Returns the lanes moved and
+/// colliders before the last mover of a particle that stayed within its box, and all those
+/// after a collider that moves it again; tests turn it off). A collider tests the lanes whose path box meets its own. Returns the lanes moved and
 /// those the second pass moved (they need the third pass, made one by one), and writes the
 /// positions after the passes, and per lane moved in the first pass the place in the
 /// scene's order of the last collider that moved it, to `out`; `None` (and nothing useful in
@@ -2723,7 +2733,7 @@ unsafe fn collide8_with<L: Lanes>(
     if second && moved.bits() != 0 {
         // The second pass, over the lanes the first moved: the colliders before the last
         // mover if the particle stayed within the box of its path at the start of the first
-        // pass, else all of them. (A position the first pass made not finite: the whole
+        // pass (and every one after a collider that moves it again), else all of them. (A position the first pass made not finite: the whole
         // group one by one, as for a non-finite input.)
         let p1 = p;
         if (p1.dot(p1) * zero).is_nan().bits() != 0 {
@@ -2738,12 +2748,15 @@ unsafe fn collide8_with<L: Lanes>(
                 .and(p1.y.le(s.y).or(p1.y.le(first.y)))
                 .and(p1.z.le(s.z).or(p1.z.le(first.z)));
         let in_box = if prune { in_box } else { zero };
-        let limit = L::select(in_box, last, L::splat(f32::INFINITY));
+        let mut limit = L::select(in_box, last, L::splat(f32::INFINITY));
         for c in 0..count {
             let active = moved.and(limit.gt(L::splat(c as f32)));
             if active.bits() != 0 {
                 let hit = collide_near(scene.collider(c), (s, p1), &mut p, active, contact);
                 again = again.or(hit);
+                // Moved again: the shapes after this one may now touch it (as one that
+                // tests every shape finds).
+                limit = L::select(hit, L::splat(f32::INFINITY), limit);
             }
         }
     }
@@ -3285,7 +3298,8 @@ mod tests {
                 }
                 // The second pass as the one-particle path makes it (see `collide_particle`):
                 // over the colliders before the last mover if the particle stayed within its
-                // first path's box, else over all of them.
+                // first path's box, else over all of them; and once one of them has moved it,
+                // over all the rest too.
                 let mut expected_second = expected;
                 let mut expected_again = 0u32;
                 for l in (0..LANES).filter(|&l| expected_moved & (1 << l) != 0) {
@@ -3297,7 +3311,10 @@ mod tests {
                         usize::MAX
                     };
                     let (low, high) = (start[l].min(expected[l]), start[l].max(expected[l]));
-                    for &c in order.iter().take(limit) {
+                    for (place, &c) in order.iter().enumerate() {
+                        if place >= limit && expected_again & (1 << l) == 0 {
+                            break;
+                        }
                         if swept[c].overlaps(low, high) {
                             let (q, hit) =
                                 swept[c].collide(start[l], expected_second[l], 0.003, 0.4);
@@ -3654,7 +3671,9 @@ mod tests {
         // thighs, pelvis) and standing on the floor: colliding eight particles together must
         // give the one-particle pass's positions bit for bit, through the later passes, the
         // floor, the crease between overlapping shapes and the tether repairs; and a second
-        // pass over only the shapes before the last mover the positions of one over all.
+        // pass over only the shapes before the last mover (and all after one that moves it
+        // again) the positions of one over all. (With the blocks split at 1/32 instead of
+        // 1/8, a pass that stopped at the last mover regardless differed here at step 29.)
         let run = |group: bool, colliders: bool, prune: bool| {
             let mut cloth = skirt_on_two_threads(Vec3::ZERO, 0.22, 0.95);
             cloth.group_collisions = group;
