@@ -1012,6 +1012,29 @@ mod tests {
     use super::*;
 
     #[test]
+    fn mul_add_rounds_once_on_every_isa() {
+        // (1 + 2⁻²³)² = 1 + 2⁻²² + 2⁻⁴⁶: rounded on its own it is 1 + 2⁻²², and subtracting
+        // that leaves 0; fused, the exact 2⁻⁴⁶ remains (closed form).
+        let a = 1.0 + f32::EPSILON;
+        let c = -(1.0 + 2.0 * f32::EPSILON);
+        let exact = (2.0f32).powi(-46);
+        assert_eq!(a * a + c, 0.0);
+        let fused = Baseline8::splat(a).mul_add(Baseline8::splat(a), Baseline8::splat(c));
+        assert_eq!(fused.to_array(), [exact; LANES]);
+        #[cfg(target_arch = "x86_64")]
+        if Isa::detect() == Isa::Avx {
+            #[target_feature(enable = "avx,fma")]
+            fn avx(a: f32, c: f32) -> [f32; LANES] {
+                Avx8::splat(a)
+                    .mul_add(Avx8::splat(a), Avx8::splat(c))
+                    .to_array()
+            }
+            // SAFETY: AVX and FMA were detected.
+            assert_eq!(unsafe { avx(a, c) }, [exact; LANES]);
+        }
+    }
+
+    #[test]
     fn gather_and_scatter_transpose_exactly() {
         let x: Vec<Vec3A> = (0..8)
             .map(|k| Vec3A::new(k as f32, 10.0 + k as f32, 20.0 + k as f32))
