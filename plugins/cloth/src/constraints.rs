@@ -112,8 +112,9 @@ pub(crate) struct BendBatch {
     /// Rest value of `C` in the stencil frame (edge, normal, binormal); zero when flat.
     pub rest: [[f32; LANES]; 3],
     /// The distance constraints solved with the stencil (see "Pairs" in the module
-    /// documentation): pair 0 is `x₀x₁`, pair 1 `x₂x₃`. Rest length ([`NO_PAIR_REST`] in a lane
-    /// without that pair, whose inverse denominator is then zero, so it changes nothing).
+    /// documentation): pair 0 is `x₀x₁`, pair 1 `x₂x₃`. Rest length ([`NO_PAIR_REST`] in a
+    /// lane without that pair, whose inverse denominator is then zero, so it changes
+    /// nothing).
     pub drest: [[f32; LANES]; 2],
     pub dcompliance: [[f32; LANES]; 2],
 }

@@ -1217,8 +1217,8 @@ impl ClothSolver {
     /// tens of microseconds, up to a millisecond here; [`Self::prewake`] starts it), or while
     /// steps run on the caller's thread alone (after a stall), the caller runs every item,
     /// which the waking overlaps; so it does, too, when a `job` the workers run calls this,
-    /// or another thread already does (the workers run one job at a time). Returns the number of threads
-    /// that took part. A panic in `job` panics here (on a worker, as "a cloth worker thread
+    /// or another thread already does (the workers run one job at a time). Returns the
+    /// number of threads that took part. A panic in `job` panics here (on a worker, as "a cloth worker thread
     /// panicked", its own message printed by that thread).
     pub fn share_out(&self, items: usize, job: &(dyn Fn(usize) + Sync)) -> usize {
         share_out(
@@ -2639,11 +2639,12 @@ impl Scene<'_> {
 /// [`StepContext::collide_particle`] makes them for each particle: the first pass, and if
 /// `second`, the second one for the lanes the first moved (`prune`: testing only the
 /// colliders before the last mover of a particle that stayed within its box, and all those
-/// after a collider that moves it again; tests turn it off). A collider tests the lanes whose path box meets its own. Returns the lanes moved and
-/// those the second pass moved (they need the third pass, made one by one), and writes the
-/// positions after the passes, and per lane moved in the first pass the place in the
-/// scene's order of the last collider that moved it, to `out`; `None` (and nothing useful in
-/// `out`) if a position is not finite, or the first pass made one so.
+/// after a collider that moves it again; tests turn it off). A collider tests the lanes
+/// whose path box meets its own. Returns the lanes moved and those the second pass moved
+/// (they need the third pass, made one by one), and writes the positions after the passes,
+/// and per lane moved in the first pass the place in the scene's order of the last collider
+/// that moved it, to `out`; `None` (and nothing useful in `out`) if a position is not
+/// finite, or the first pass made one so.
 ///
 /// # Safety
 /// `start` and `now` point at eight particles that the calling item owns.
@@ -2733,8 +2734,9 @@ unsafe fn collide8_with<L: Lanes>(
     if second && moved.bits() != 0 {
         // The second pass, over the lanes the first moved: the colliders before the last
         // mover if the particle stayed within the box of its path at the start of the first
-        // pass (and every one after a collider that moves it again), else all of them. (A position the first pass made not finite: the whole
-        // group one by one, as for a non-finite input.)
+        // pass (and every one after a collider that moves it again), else all of them. (A
+        // position the first pass made not finite: the whole group one by one, as for a
+        // non-finite input.)
         let p1 = p;
         if (p1.dot(p1) * zero).is_nan().bits() != 0 {
             return None;
