@@ -7,6 +7,10 @@
 //!   garment in that skinned pose.
 //! * Attached vertices (waistband, shoulder straps, a skinned bodice) follow their skinned
 //!   position each step; the solver moves them there linearly over the substeps.
+//! * The solver steps only the garment's simulated part ([`simulated_part`]): the free vertices
+//!   and the attached ones that share a constraint with them. The rest of the static part (the
+//!   inside of a skinned bodice or of a wide band) cannot move the cloth; it is skinned when the
+//!   garment is read or drawn, not in every 120 Hz step.
 //! * The body collides as [`BodyColliders`] posed by the same transforms; the floor is a plane.
 //! * A blow-up (non-finite positions, absurd speed or stretch, reported by the solver's guard)
 //!   resets the garment to its skinned pose instead of crashing, and is counted.
@@ -104,7 +108,20 @@ pub struct GarmentSim {
     solver: ClothSolver,
     rest: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
+    /// The garment vertices of the solver's attached particles, in the solver's order (both
+    /// increasing).
     attached: Vec<u32>,
+    /// The solver's attached particles (increasing).
+    attached_particles: Vec<u32>,
+    /// Per solver particle: its garment vertex (increasing).
+    particle_vertex: Vec<u32>,
+    /// Per garment vertex: its solver particle, or [`NOT_SIMULATED`].
+    vertex_particle: Vec<u32>,
+    /// The skinning of the last step or reset (empty before the first): where the vertices the
+    /// solver does not step are.
+    skinning: Vec<Affine3A>,
+    /// Buffer of the garment's positions for [`GarmentSim::step`]'s measurements.
+    measured: Vec<Vec3>,
     /// Per garment vertex: bone indices and weights (from the nearest body vertex).
     skin: Vec<([u16; 4], [f32; 4])>,
     colliders: BodyColliders,
@@ -451,6 +468,70 @@ fn nearest(points: &[Vec3], queries: &[Vec3]) -> Vec<usize> {
         .collect()
 }
 
+/// [`GarmentSim`]'s mark of a garment vertex the solver does not step.
+const NOT_SIMULATED: u32 = u32::MAX;
+
+/// The part of a garment (`vertex_count` vertices, `triangles`, `attached` ones following the
+/// body) that the solver steps: its vertices (increasing) and its triangles in their numbering.
+///
+/// That is every triangle with a free vertex, and every triangle that shares an edge with one
+/// (so that each bending stencil, which spans the two triangles of an edge, and each distance
+/// constraint with a free particle is whole), with their vertices and any free vertex in no
+/// triangle. The attached vertices left out (the inside of a skinned bodice) share no
+/// constraint with a free particle, and tethers run to the nearest attached vertices along the
+/// mesh, which border the free ones: leaving them out changes no constraint and no tether of
+/// the free cloth. A garment without free vertices keeps them all.
+pub fn simulated_part(
+    vertex_count: usize,
+    triangles: &[[u32; 3]],
+    attached: &[u32],
+) -> (Vec<u32>, Vec<[u32; 3]>) {
+    let mut is_attached = vec![false; vertex_count];
+    for &v in attached {
+        if let Some(a) = is_attached.get_mut(v as usize) {
+            *a = true;
+        }
+    }
+    let free = |v: u32| !is_attached.get(v as usize).copied().unwrap_or(true);
+    if !(0..vertex_count as u32).any(free) {
+        return ((0..vertex_count as u32).collect(), triangles.to_vec());
+    }
+    let edge = |t: &[u32; 3], k: usize| {
+        let (a, b) = (t[k], t[(k + 1) % 3]);
+        (a.min(b), a.max(b))
+    };
+    let with_free = |t: &[u32; 3]| t.iter().any(|&v| free(v));
+    let free_edges: std::collections::HashSet<(u32, u32)> = triangles
+        .iter()
+        .filter(|t| with_free(t))
+        .flat_map(|t| (0..3).map(move |k| edge(t, k)))
+        .collect();
+    let kept: Vec<&[u32; 3]> = triangles
+        .iter()
+        .filter(|t| with_free(t) || (0..3).any(|k| free_edges.contains(&edge(t, k))))
+        .collect();
+    let mut keep: Vec<bool> = (0..vertex_count as u32).map(free).collect();
+    for t in &kept {
+        for &v in t.iter() {
+            if let Some(k) = keep.get_mut(v as usize) {
+                *k = true;
+            }
+        }
+    }
+    let vertices: Vec<u32> = (0..vertex_count as u32)
+        .filter(|&v| keep[v as usize])
+        .collect();
+    let mut number = vec![NOT_SIMULATED; vertex_count];
+    for (i, &v) in vertices.iter().enumerate() {
+        number[v as usize] = i as u32;
+    }
+    let triangles = kept
+        .into_iter()
+        .map(|t| t.map(|v| number[v as usize]))
+        .collect();
+    (vertices, triangles)
+}
+
 /// Free vertices nearer than this to a collider in the rest pose are "near" for [`work_hints`].
 const NEAR_BODY_M: f32 = 0.03;
 /// The extra work of a near vertex, in units of a free vertex's.
@@ -494,7 +575,34 @@ impl GarmentSim {
         garment: &SimGarment,
         settings: SolverSettings,
     ) -> Result<Self, SimError> {
-        let mesh = ClothMesh::new(garment.positions.clone(), garment.triangles.clone())?;
+        let vertex_count = garment.positions.len();
+        let (particle_vertex, part_triangles) =
+            simulated_part(vertex_count, &garment.triangles, &garment.attached);
+        let mut vertex_particle = vec![NOT_SIMULATED; vertex_count];
+        for (p, &v) in particle_vertex.iter().enumerate() {
+            vertex_particle[v as usize] = p as u32;
+        }
+        let mut attached: Vec<u32> = garment
+            .attached
+            .iter()
+            .copied()
+            .filter(|&v| {
+                vertex_particle
+                    .get(v as usize)
+                    .is_some_and(|&p| p != NOT_SIMULATED)
+            })
+            .collect();
+        attached.sort_unstable();
+        attached.dedup();
+        let attached_particles: Vec<u32> = attached
+            .iter()
+            .map(|&v| vertex_particle[v as usize])
+            .collect();
+        let part_positions: Vec<Vec3> = particle_vertex
+            .iter()
+            .map(|&v| garment.positions[v as usize])
+            .collect();
+        let mesh = ClothMesh::new(part_positions.clone(), part_triangles)?;
         let settings = SolverSettings {
             collision_thickness: settings.collision_thickness.max(BODY_SKIN_OFFSET_M),
             ..settings
@@ -509,9 +617,9 @@ impl GarmentSim {
         colliders
             .capsules
             .retain(|c| !garment.ignore_colliders.iter().any(|n| n == c.name));
-        let work = work_hints(&garment.positions, &garment.attached, &colliders);
+        let work = work_hints(&part_positions, &attached_particles, &colliders);
         let solver =
-            ClothSolver::new_balanced(&mesh, garment.fabric, &garment.attached, settings, &work)?;
+            ClothSolver::new_balanced(&mesh, garment.fabric, &attached_particles, settings, &work)?;
         // Every vertex takes the skin of its nearest body vertex, smoothed over the garment's
         // mesh (a sleeve's armpit edge would otherwise be torn between the arm and the chest in
         // a pose): the attached ones follow the body with it, and a reset puts the whole garment
@@ -545,11 +653,12 @@ impl GarmentSim {
             solver,
             rest: garment.positions.clone(),
             triangles: garment.triangles.clone(),
-            attached: {
-                let mut a = garment.attached.clone();
-                a.sort_unstable();
-                a
-            },
+            attached,
+            attached_particles,
+            particle_vertex,
+            vertex_particle,
+            skinning: Vec::new(),
+            measured: Vec::new(),
             skin,
             colliders,
             bones: model.bones.len(),
@@ -606,6 +715,35 @@ impl GarmentSim {
         (0..self.rest.len())
             .map(|v| self.skin_point(v, skinning))
             .collect()
+    }
+
+    /// Where garment vertex `v`, which the solver does not step, is: skinned by the last
+    /// step's or reset's skinning (at rest before the first).
+    fn static_point(&self, v: usize) -> Vec3 {
+        if self.skinning.is_empty() {
+            self.rest[v]
+        } else {
+            self.skin_point(v, &self.skinning)
+        }
+    }
+
+    /// The garment's positions into `out` (cleared first): the solver's particles, and the
+    /// static vertices it does not step where the last skinning puts them.
+    fn positions_into(&self, out: &mut Vec<Vec3>) {
+        let particles = self.solver.positions();
+        out.clear();
+        out.extend(self.vertex_particle.iter().enumerate().map(|(v, &p)| {
+            match particles.get(p as usize) {
+                Some(&q) => Vec3::from(q),
+                None => self.static_point(v),
+            }
+        }));
+    }
+
+    /// Keeps `skinning` for the static vertices (without allocating after the first time).
+    fn keep_skinning(&mut self, skinning: &[Affine3A]) {
+        self.skinning.clear();
+        self.skinning.extend_from_slice(skinning);
     }
 
     fn check(&self, skinning: &[Affine3A]) -> Result<(), SimError> {
@@ -746,6 +884,7 @@ impl GarmentSim {
                 }
             }
             if healthy {
+                self.keep_skinning(skinning);
                 return Ok(());
             }
         }
@@ -754,7 +893,12 @@ impl GarmentSim {
 
     /// The garment in its skinned pose, at rest, with the colliders where they are.
     fn place(&mut self, skinning: &[Affine3A]) -> Result<(), SimError> {
-        let skinned = self.skinned(skinning);
+        let skinned: Vec<Vec3> = self
+            .particle_vertex
+            .iter()
+            .map(|&v| self.skin_point(v as usize, skinning))
+            .collect();
+        self.keep_skinning(skinning);
         self.solver.reset_to(&skinned)?;
         let (posed, _) = self.posed_colliders(skinning, &self.anchors(skinning));
         self.set_solver_colliders(&posed)?;
@@ -789,6 +933,7 @@ impl GarmentSim {
             self.spare_targets = old;
         }
         self.set_solver_colliders(&posed)?;
+        self.keep_skinning(skinning);
         let report: StepReport = self.solver.step(dt)?;
         let mut reset = false;
         let mut blow_up = None;
@@ -800,7 +945,11 @@ impl GarmentSim {
         }
         let solve_ms = start.elapsed().as_secs_f64() * 1e3;
         let (max_penetration_m, max_strain_pct) = if self.measuring {
-            self.measure_on_threads(&posed)
+            let mut measured = std::mem::take(&mut self.measured);
+            self.positions_into(&mut measured);
+            let figures = self.measure_on_threads(&posed, &measured);
+            self.measured = measured;
+            figures
         } else {
             (0.0, 0.0)
         };
@@ -829,8 +978,7 @@ impl GarmentSim {
     /// [`Self::render_surface`] into `positions` and `normals` (cleared first), to reuse their
     /// storage frame after frame.
     pub fn render_surface_into(&self, positions: &mut Vec<Vec3>, normals: &mut Vec<Vec3>) {
-        positions.clear();
-        positions.extend(self.solver.positions().iter().map(|&p| Vec3::from(p)));
+        self.positions_into(positions);
         fitroom_body::rig::compute_normals_into(positions, &self.triangles, normals);
         for ((p, &n), &w) in positions
             .iter_mut()
@@ -845,11 +993,15 @@ impl GarmentSim {
 
     /// The garment's current positions.
     pub fn positions(&self) -> Vec<Vec3> {
-        self.solver
-            .positions()
-            .iter()
-            .map(|&p| Vec3::from(p))
-            .collect()
+        let mut out = Vec::new();
+        self.positions_into(&mut out);
+        out
+    }
+
+    /// Particles the solver steps (the garment's vertices less the static ones that share no
+    /// constraint with a free one, see [`simulated_part`]).
+    pub fn simulated_particles(&self) -> usize {
+        self.solver.particle_count()
     }
 
     pub fn triangles(&self) -> &[[u32; 3]] {
@@ -879,7 +1031,7 @@ impl GarmentSim {
     /// Per vertex: the largest stretch of its edges over their rest length, % (negative when
     /// all its edges are compressed).
     pub fn strain_pct(&self) -> Vec<f32> {
-        let p = self.solver.positions();
+        let p = self.positions();
         let mut out = vec![f32::NEG_INFINITY; p.len()];
         for &(a, b, rest) in &self.edges {
             if rest <= 0.0 {
@@ -911,11 +1063,7 @@ impl GarmentSim {
     }
 
     fn gaps(&self, posed: &[(Vec3, Vec3, f32, f32)]) -> Vec<f32> {
-        self.solver
-            .positions()
-            .iter()
-            .map(|&q| gap(q.into(), posed))
-            .collect()
+        self.positions().iter().map(|&q| gap(q, posed)).collect()
     }
 
     fn deepest(&self, posed: &[(Vec3, Vec3, f32, f32)]) -> f32 {
@@ -929,14 +1077,17 @@ impl GarmentSim {
         self.solver.positions()[range]
             .iter()
             .enumerate()
-            .filter(|(i, _)| self.attached.binary_search(&((start + i) as u32)).is_err())
+            .filter(|(i, _)| {
+                self.attached_particles
+                    .binary_search(&((start + i) as u32))
+                    .is_err()
+            })
             .fold(0.0f32, |m, (_, &q)| m.max(-gap(q.into(), posed)))
     }
 
-    /// The largest stretch over its rest length of the edges of `range`, % (0 if none is
-    /// stretched; never NaN): the largest of [`Self::strain_pct`] over them.
-    fn max_strain_pct_of(&self, range: Range<usize>) -> f32 {
-        let p = self.solver.positions();
+    /// The largest stretch over its rest length of the edges of `range`, the garment at `p`,
+    /// % (0 if none is stretched; never NaN): the largest of [`Self::strain_pct`] over them.
+    fn max_strain_pct_of(&self, p: &[Vec3], range: Range<usize>) -> f32 {
         self.edges[range]
             .iter()
             .filter(|e| e.2 > 0.0)
@@ -949,7 +1100,7 @@ impl GarmentSim {
     /// is the largest of its pieces'). Besides taking half the time, this keeps the workers
     /// awake for the next step, as the steps of a frame find them when nothing is measured
     /// between them.
-    fn measure_on_threads(&self, posed: &[(Vec3, Vec3, f32, f32)]) -> (f32, f32) {
+    fn measure_on_threads(&self, posed: &[(Vec3, Vec3, f32, f32)], p: &[Vec3]) -> (f32, f32) {
         const PIECES: usize = 16;
         let posing = &self.posing;
         posing.deepest.store(0, Ordering::Relaxed);
@@ -967,7 +1118,7 @@ impl GarmentSim {
             posing
                 .deepest
                 .fetch_max(deepest.to_bits(), Ordering::Relaxed);
-            let strain = self.max_strain_pct_of(piece(edges, k)) + 0.0;
+            let strain = self.max_strain_pct_of(p, piece(edges, k)) + 0.0;
             posing.strain.fetch_max(strain.to_bits(), Ordering::Relaxed);
         });
         (
@@ -1070,6 +1221,111 @@ mod tests {
         assert!(on_two > 0, "the two threads never posed together");
         assert!(cut > 0.0, "no collider was fitted: the test shows nothing");
         eprintln!("posed on two threads after {on_two} of {k} steps; largest cut {cut} m");
+    }
+
+    /// A strip of 2 × 8 vertices attached at its first four columns: the solver steps the
+    /// free columns, the attached column next to them and the one vertex of the column before
+    /// that a triangle sharing an edge with a free triangle brings in.
+    #[test]
+    fn the_simulated_part_is_the_free_cloth_and_the_triangles_around_it() {
+        let mut triangles = Vec::new();
+        for i in 0..7u32 {
+            let (a, b, c, d) = (i, i + 1, i + 8, i + 9);
+            triangles.push([a, b, d]);
+            triangles.push([a, d, c]);
+        }
+        let attached: Vec<u32> = (0..4).chain(8..12).collect();
+        let (vertices, part) = simulated_part(16, &triangles, &attached);
+        // [3, 4, 12] and [3, 12, 11] hold free vertices; [2, 3, 11] shares their edge 3-11
+        // (the bending stencil across it reaches the free vertex 12), so vertex 2 comes in;
+        // [2, 11, 10] shares no edge with a free triangle, so vertex 10 stays out.
+        let expected: Vec<u32> = (2..8).chain(11..16).collect();
+        assert_eq!(vertices, expected);
+        assert_eq!(
+            part.len(),
+            2 * 4 + 1,
+            "four free quads and one triangle around them"
+        );
+        for t in &part {
+            for &v in t {
+                assert!((v as usize) < vertices.len());
+            }
+        }
+        // Nothing free: everything is kept.
+        let all: Vec<u32> = (0..16).collect();
+        let (vertices, part) = simulated_part(16, &triangles, &all);
+        assert_eq!(vertices, all);
+        assert_eq!(part, triangles);
+    }
+
+    /// On the sun dress (a skinned bodice over a simulated skirt), the solver's part holds
+    /// every constraint and tether the whole garment's solver has, and the same particle
+    /// masses; the static vertices left out are drawn where the skinning puts them.
+    #[test]
+    fn the_dress_solver_part_keeps_every_constraint_of_the_whole_dress() {
+        let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
+        let model = BodyModel::read(&assets.join("bodies/makehuman.fitbody")).expect("the body");
+        let shaped = model
+            .shaped(&fitroom_body::Shape::default())
+            .expect("the default shape");
+        let surface = crate::BodySurface::new(&model, &shaped).expect("the body measures");
+        let dress = crate::Pattern::load(assets.join("garments/sundress.ron"))
+            .expect("the sun dress")
+            .build(&surface, "38", &crate::BuildOptions::default())
+            .expect("the dress on the body");
+        let settings = SolverSettings {
+            threads: 1,
+            ..SolverSettings::default()
+        };
+        let garment = SimGarment::from_mesh(&dress);
+        let mut sim = GarmentSim::new(
+            &model,
+            &shaped.positions,
+            &shaped.rest_pose,
+            &garment,
+            settings,
+        )
+        .expect("a valid garment");
+        let whole = ClothSolver::new(
+            &ClothMesh::new(garment.positions.clone(), garment.triangles.clone())
+                .expect("the dress's mesh"),
+            garment.fabric,
+            &garment.attached,
+            settings,
+        )
+        .expect("the whole dress's solver");
+        let n = garment.positions.len();
+        let part = sim.simulated_particles();
+        assert!(part < n, "the bodice's inside is left out: {part} of {n}");
+        assert!(part > n - garment.attached.len(), "every free vertex is in");
+        assert_eq!(sim.solver.constraint_counts(), whole.constraint_counts());
+        assert_eq!(sim.solver.tether_count(), whole.tether_count());
+        for (p, &v) in sim.particle_vertex.iter().enumerate() {
+            if sim.attached_particles.binary_search(&(p as u32)).is_err() {
+                assert_eq!(
+                    sim.solver.masses()[p],
+                    whole.masses()[v as usize],
+                    "vertex {v}"
+                );
+            }
+        }
+        // A turned pose: the static vertices are where skinning puts them, the others where
+        // the solver has them.
+        let pose: Vec<Affine3A> = (0..model.bones.len())
+            .map(|b| Affine3A::from_rotation_y(0.01 * (b % 5) as f32))
+            .collect();
+        sim.reset(&pose).expect("a reset");
+        sim.step(&pose, 1.0 / 120.0).expect("a step");
+        let positions = sim.positions();
+        assert_eq!(positions.len(), n);
+        for (v, &p) in positions.iter().enumerate() {
+            match sim.vertex_particle[v] {
+                NOT_SIMULATED => assert_eq!(p, sim.skin_point(v, &pose), "static vertex {v}"),
+                q => assert_eq!(p, Vec3::from(sim.solver.positions()[q as usize])),
+            }
+        }
+        let (drawn, normals) = sim.render_surface();
+        assert_eq!((drawn.len(), normals.len()), (n, n));
     }
 
     #[test]
