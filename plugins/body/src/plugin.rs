@@ -8,6 +8,9 @@
 //! The avatar's body shape is the [`AvatarShape`] resource: changing it reshapes the avatar
 //! live (morph targets, normals, the skeleton's rest pose and the skin's bind poses, ~1.3 ms)
 //! and re-measures it into [`AvatarMeasurements`].
+//!
+//! [`HiddenSkin`] marks the body vertices a garment covers (the garment plugin sets it): the
+//! skin's triangles whose three vertices are all covered are left out of the mesh drawn.
 
 use std::sync::Arc;
 
@@ -89,6 +92,12 @@ pub struct AvatarJoint(pub usize);
 #[derive(Component, Debug)]
 pub struct AvatarSkin;
 
+/// Per body vertex, whether a garment covers it (`None`: nothing is covered). The skin's
+/// triangles whose three vertices are covered are not drawn, so that the body cannot show
+/// through the garment where the cloth, resting on colliders inside the skin, lies under it.
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct HiddenSkin(pub Option<Vec<bool>>);
+
 /// Where the avatar stands: the sensor-to-world transform.
 #[derive(Resource, Debug, Clone, Copy)]
 pub struct SensorPlacement {
@@ -135,13 +144,15 @@ impl Plugin for BodyPlugin {
         .init_resource::<SensorPlacement>()
         .init_resource::<AvatarShape>()
         .init_resource::<AvatarMeasurements>()
+        .init_resource::<HiddenSkin>()
         .add_systems(Startup, (spawn_avatar, measure_avatar))
         .add_systems(
             Update,
             reshape_avatar
                 .run_if(resource_exists_and_changed::<AvatarShape>)
                 .in_set(BodySystems::Reshape),
-        );
+        )
+        .add_systems(PostUpdate, hide_covered_skin);
     }
 }
 
@@ -242,6 +253,45 @@ fn spawn_avatar(
         ))
         .id();
     commands.entity(avatar).add_child(skin);
+}
+
+/// The body's triangles (vertex indices) less those whose three vertices `hidden` marks.
+pub fn visible_skin_indices(model: &BodyModel, hidden: Option<&[bool]>) -> Vec<u32> {
+    let covered = |v: u32| {
+        hidden
+            .and_then(|h| h.get(v as usize))
+            .copied()
+            .unwrap_or(false)
+    };
+    model
+        .triangles
+        .iter()
+        .filter(|t| !t.iter().all(|&v| covered(v)))
+        .flatten()
+        .copied()
+        .collect()
+}
+
+/// Applies [`HiddenSkin`] to the skin's mesh when it changes or the mesh is replaced (a
+/// reshaped avatar).
+fn hide_covered_skin(
+    hidden: Res<HiddenSkin>,
+    body: Option<Res<AvatarBody>>,
+    skins: Query<Ref<Mesh3d>, With<AvatarSkin>>,
+    mut meshes: Option<ResMut<Assets<Mesh>>>,
+) {
+    let (Some(body), Some(meshes)) = (body, meshes.as_mut()) else {
+        return;
+    };
+    for mesh3d in &skins {
+        if !(hidden.is_changed() || mesh3d.is_changed()) {
+            continue;
+        }
+        if let Some(mut mesh) = meshes.get_mut(&mesh3d.0) {
+            let indices = visible_skin_indices(&body.model, hidden.0.as_deref());
+            mesh.insert_indices(Indices::U32(indices));
+        }
+    }
 }
 
 /// The skin's inverse bind poses for a rest pose (model space).

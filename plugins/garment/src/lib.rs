@@ -48,6 +48,7 @@
 
 pub mod binding;
 pub mod body;
+pub mod cover;
 pub mod error;
 pub mod fabric;
 pub mod garment;

@@ -14,6 +14,8 @@
 //!   asserts that every position stays finite.
 //! * With [`ClothSettings::fit_map`] the garment is coloured by strain (blue: slack, white:
 //!   rest length, red: stretched 10% or more), like a CLO3D strain map.
+//! * With [`ClothSettings::hide_covered_skin`] (the default) the body's skin that the garment
+//!   surely covers is not drawn ([`crate::cover`], [`HiddenSkin`]).
 
 use std::path::PathBuf;
 use std::time::{Instant, SystemTime};
@@ -26,7 +28,7 @@ use bevy::{
 };
 use fitroom_body::{
     ShapedBody,
-    plugin::{AvatarBody, AvatarJoint},
+    plugin::{AvatarBody, AvatarJoint, HiddenSkin},
 };
 use fitroom_cloth::SolverSettings;
 use glam::Affine3A;
@@ -46,6 +48,8 @@ pub struct ClothSettings {
     pub budget_ms: f32,
     /// Colour the garment by strain.
     pub fit_map: bool,
+    /// Leave out the body's skin that the garment covers ([`crate::cover`]).
+    pub hide_covered_skin: bool,
 }
 
 impl Default for ClothSettings {
@@ -55,6 +59,7 @@ impl Default for ClothSettings {
             substeps: 10,
             budget_ms: 8.0,
             fit_map: false,
+            hide_covered_skin: true,
         }
     }
 }
@@ -256,6 +261,7 @@ fn load_garment(
     joints: Query<(&AvatarJoint, &GlobalTransform)>,
     mut meshes: Option<ResMut<Assets<Mesh>>>,
     mut materials: Option<ResMut<Assets<StandardMaterial>>>,
+    mut hidden: Option<ResMut<HiddenSkin>>,
 ) {
     let Some(body) = body else {
         return;
@@ -269,11 +275,15 @@ fn load_garment(
             commands.entity(e).despawn();
         }
         status.worn = None;
+        if let Some(hidden) = hidden.as_mut() {
+            hidden.0 = None;
+        }
         return;
     };
     watched.path = Some(path.clone());
     watched.modified = std::fs::metadata(&path).and_then(|m| m.modified()).ok();
-    let built = (|| -> Result<(crate::GarmentMesh, GarmentSim), String> {
+    type Built = (crate::GarmentMesh, GarmentSim, Option<Vec<bool>>);
+    let built = (|| -> Result<Built, String> {
         let shaped = ShapedBody {
             weights: Vec::new(),
             positions: body.positions.clone(),
@@ -308,9 +318,26 @@ fn load_garment(
         let garment = SimGarment::from_mesh(&mesh);
         let sim = GarmentSim::new(&body.model, &body.positions, &body.rest, &garment, solver)
             .map_err(|e| e.to_string())?;
-        Ok((mesh, sim))
+        let n = (body.model.body_vertex_count as usize)
+            .min(body.positions.len())
+            .min(body.normals.len());
+        let covered = if settings.hide_covered_skin {
+            let skin = (&body.positions[..n], &body.normals[..n]);
+            let covered = crate::cover::covered_skin(
+                &body.model,
+                skin,
+                &mesh.positions,
+                &mesh.triangles,
+                &garment.attached,
+            )
+            .map_err(|e| format!("{}: {e}", path.display()))?;
+            Some(covered)
+        } else {
+            None
+        };
+        Ok((mesh, sim, covered))
     })();
-    let (garment, mut sim) = match built {
+    let (garment, mut sim, covered) = match built {
         Ok(b) => b,
         Err(e) => {
             warn!("garment not (re)loaded, the avatar keeps what it wears: {e}");
@@ -327,6 +354,9 @@ fn load_garment(
     }
     for e in &worn {
         commands.entity(e).despawn();
+    }
+    if let Some(hidden) = hidden.as_mut() {
+        hidden.0 = covered;
     }
     status.worn = Some(format!("{} {}", garment.name, garment.size));
     status.particles = garment.positions.len();

@@ -195,7 +195,8 @@ pub const BODY_SKIN_OFFSET_M: f32 = 0.003;
 /// on the skin, or a larger collision offset, stretch the skirt against its skinned waistband
 /// instead (tried: a 10-15 mm offset took tethers to 1.7-2.4 on 16_11). Drawing the free
 /// cloth a little farther out hides most of it (15 mm left large patches of thigh, 25 mm a
-/// few small ones in a long stride) and changes no simulated figure.
+/// few small ones in a long stride) and changes no simulated figure; the app also leaves out
+/// the skin the garment surely covers ([`crate::cover`]), which hides the rest.
 pub const RENDER_OFFSET_M: f32 = 0.025;
 
 /// Edges over which that offset blends in from the attached part.
