@@ -86,12 +86,27 @@ pub struct Sphere {
     pub center: Vec3,
     /// Radius (≥ 0).
     pub radius: f32,
+    /// The share (≥ 0) of the fabric's friction the cloth meets on it: 1 by default, 0 for a
+    /// collider the cloth slides off (a capsule takes the smaller of its spheres').
+    pub friction: f32,
 }
 
 impl Sphere {
-    /// A sphere.
+    /// A sphere with the fabric's friction.
     pub fn new(center: Vec3, radius: f32) -> Self {
-        Self { center, radius }
+        Self {
+            center,
+            radius,
+            friction: 1.0,
+        }
+    }
+
+    /// The sphere with `share` of the fabric's friction (see [`Sphere::friction`]).
+    pub fn with_friction(self, share: f32) -> Self {
+        Self {
+            friction: share,
+            ..self
+        }
     }
 
     /// Signed distance from `p` to the surface (negative inside).
@@ -368,6 +383,8 @@ pub(crate) struct SweptCollider {
     pub rotation: Mat3A,
     pub bounds_min: Vec3A,
     pub bounds_max: Vec3A,
+    /// The share of the fabric's friction on it ([`Sphere::friction`]).
+    pub friction: f32,
 }
 
 impl SweptCollider {
@@ -389,6 +406,15 @@ impl SweptCollider {
             rotation,
             bounds_min: a0.min(a1) - pad,
             bounds_max: b0.max(b1) + pad,
+            friction: 1.0,
+        }
+    }
+
+    /// The collider with `share` of the fabric's friction.
+    pub fn with_friction(self, share: f32) -> Self {
+        Self {
+            friction: share,
+            ..self
         }
     }
 

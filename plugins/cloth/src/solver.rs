@@ -1025,9 +1025,14 @@ impl ClothSolver {
         capsules: &[[u32; 2]],
     ) -> Result<(), ClothError> {
         for (index, s) in spheres.iter().enumerate() {
-            if !s.center.is_finite() || !s.radius.is_finite() || s.radius < 0.0 {
+            if !s.center.is_finite()
+                || !s.radius.is_finite()
+                || s.radius < 0.0
+                || !s.friction.is_finite()
+                || s.friction < 0.0
+            {
                 return Err(ClothError::NonFiniteInput {
-                    what: "collision sphere (finite centre, finite radius >= 0)",
+                    what: "collision sphere (finite centre, finite radius >= 0, finite friction >= 0)",
                     index,
                 });
             }
@@ -1623,6 +1628,13 @@ impl ClothSolver {
                 a.radius + (b.radius - a.radius) * t,
             )
         };
+        // A collider's share of the fabric's friction.
+        let friction_of = |collider: usize| -> f32 {
+            match capsules.get(collider) {
+                Some(&[i, j]) => end[i as usize].friction.min(end[j as usize].friction),
+                None => end[solo[collider - capsules.len()] as usize].friction,
+            }
+        };
         let shape_at = |collider: usize, t: f32| -> Shape {
             if let Some(&[i, j]) = capsules.get(collider) {
                 let (a, ra) = sphere_at(i, t);
@@ -1642,7 +1654,8 @@ impl ClothSolver {
             );
             for collider in 0..count {
                 let c =
-                    SweptCollider::new(shape_at(collider, t0), shape_at(collider, t1), thickness);
+                    SweptCollider::new(shape_at(collider, t0), shape_at(collider, t1), thickness)
+                        .with_friction(friction_of(collider));
                 // SAFETY: substep `sub`'s slots are written by the thread that claimed it
                 // alone, and read by no one until every thread has returned.
                 unsafe { swept.set(sub * count + collider, c) };
@@ -2399,7 +2412,8 @@ impl StepContext<'_> {
                             return;
                         }
                         if collider.overlaps(seg_low, seg_high) {
-                            let (q, hit) = collider.collide(start, p, k.thickness, k.friction);
+                            let friction = k.friction * collider.friction;
+                            let (q, hit) = collider.collide(start, p, k.thickness, friction);
                             if hit {
                                 p = q;
                                 last = Some(place);
@@ -2686,6 +2700,7 @@ fn collide_near<L: Lanes>(
     if lanes.bits() == 0 {
         return lanes;
     }
+    let friction = friction * collider.friction;
     let (q, hit) = collider.collide_lanes(start, *p, lanes, thickness, friction);
     if hit.bits() != 0 {
         *p = V3::select(hit, q, *p);
@@ -3676,7 +3691,8 @@ mod tests {
         // pass over only the shapes before the last mover (and all after one that moves it
         // again) the positions of one over all. (With the blocks split at 1/32 instead of
         // 1/8, a pass that stopped at the last mover regardless differed here at step 29.)
-        let run = |group: bool, colliders: bool, prune: bool| {
+        // One thigh is frictionless: both paths take each collider's share of the friction.
+        let run_with = |group: bool, colliders: bool, prune: bool, thigh_friction: f32| {
             let mut cloth = skirt_on_two_threads(Vec3::ZERO, 0.22, 0.95);
             cloth.group_collisions = group;
             cloth.prune_passes = prune;
@@ -3688,8 +3704,8 @@ mod tests {
                 let spheres = [
                     Sphere::new(Vec3::new(-0.1, 0.85, 0.0), 0.12),
                     Sphere::new(Vec3::new(-0.1, 0.45, swing), 0.07),
-                    Sphere::new(Vec3::new(0.1, 0.85, 0.0), 0.12),
-                    Sphere::new(Vec3::new(0.1, 0.45, -swing), 0.07),
+                    Sphere::new(Vec3::new(0.1, 0.85, 0.0), 0.12).with_friction(thigh_friction),
+                    Sphere::new(Vec3::new(0.1, 0.45, -swing), 0.07).with_friction(thigh_friction),
                     Sphere::new(Vec3::new(0.0, 0.95, 0.03), 0.16),
                     // A foot by the hem, which lies on the floor.
                     Sphere::new(Vec3::new(0.2, 0.04, swing), 0.06),
@@ -3703,12 +3719,15 @@ mod tests {
             }
             position_bits(&cloth)
         };
+        let run =
+            |group: bool, colliders: bool, prune: bool| run_with(group, colliders, prune, 0.0);
         let grouped = run(true, true, true);
         assert_eq!(grouped, run(false, true, true));
         // The second pass gives what testing every shape again gives.
         assert_eq!(grouped, run(true, true, false));
-        // The colliders did move the cloth.
+        // The colliders did move the cloth, and the frictionless thigh let it slide.
         assert_ne!(grouped, run(true, false, true));
+        assert_ne!(grouped, run_with(true, true, true, 1.0));
     }
 
     #[test]

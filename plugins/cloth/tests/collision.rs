@@ -50,6 +50,32 @@ fn a_cloth_dropped_on_a_sphere_stays_outside_it() {
     assert!(centre.y > 0.49 && centre.y < 0.52, "centre at {centre}");
 }
 
+/// A sheet dropped off-centre on a sphere slides down its side: farther on a frictionless
+/// sphere (a share of 0 of the fabric's friction) than on one with the fabric's friction,
+/// and outside it either way.
+#[test]
+fn a_cloth_slides_farther_off_a_frictionless_sphere() {
+    let slide = |share: f32| {
+        let mesh = horizontal_cloth(0.5, 20, 0.56);
+        let fabric = Fabric {
+            friction: 0.8,
+            ..Fabric::denim()
+        };
+        let mut cloth = solver(&mesh, fabric, &[], settings(2));
+        // The sheet's centre 9 cm to the left of the sphere's top.
+        let sphere = Sphere::new(Vec3::new(0.09, 0.3, 0.0), 0.25).with_friction(share);
+        cloth.set_colliders(&[sphere], &[]).unwrap();
+        for step in 0..90 {
+            cloth.step(DT).unwrap();
+            check_outside(&cloth, step, |p| sphere.signed_distance(p));
+        }
+        cloth.positions()[10 * 21 + 10].x
+    };
+    let (held, free) = (slide(1.0), slide(0.0));
+    println!("the sheet's centre after 0.75 s: x = {held} with friction, {free} without");
+    assert!(free < held - 0.01, "{free} against {held}");
+}
+
 #[test]
 fn a_cloth_dropped_on_a_tapered_capsule_stays_outside_it() {
     let mesh = horizontal_cloth(1.0, 40, 0.7);
