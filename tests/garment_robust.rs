@@ -3,10 +3,12 @@
 //! garments the kiosk ships. After every 120 Hz step: no NaN, no simulated particle more than
 //! 5 mm inside a body collider, no tether past 110 % of its rest length, no blow-up reset.
 //!
-//! Every garment of this test ignores the forearm and hand colliders (its file says so): a
+//! The skirt and the T-shirt ignore the forearm and hand colliders (their files say so): a
 //! forearm swept through the chest would otherwise pin the cloth inside the trunk and tear it
-//! (the T-shirt did, with stretch resets from the first swing, before it ignored them).
-//! Penetration is measured against the colliders a garment keeps.
+//! (the T-shirt did, with stretch resets from the first swing, before it ignored them). The
+//! sun dress collides with them, yielding to the trunk and thighs and frictionless
+//! (`fitroom_garment::sim`), so here they also sweep through its bodice and skirt.
+//! Penetration is measured against the colliders a garment keeps, as the solver meets them.
 
 use fitroom::cloth_cli::{STEP_HZ, load_garment};
 use fitroom_body::{BodyModel, Shape};
