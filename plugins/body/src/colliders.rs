@@ -73,20 +73,38 @@ pub enum ColliderError {
     VertexCount { got: usize, expected: usize },
 }
 
-/// Limb segments: (bone, child bone whose head ends the segment, name).
-const LIMBS: [(&str, &str, &str); 11] = [
-    ("upperarm_l", "lowerarm_l", "upperarm_l"),
-    ("lowerarm_l", "hand_l", "lowerarm_l"),
-    ("upperarm_r", "lowerarm_r", "upperarm_r"),
-    ("lowerarm_r", "hand_r", "lowerarm_r"),
-    ("thigh_l", "calf_l", "thigh_l"),
-    ("calf_l", "foot_l", "calf_l"),
-    ("thigh_r", "calf_r", "thigh_r"),
-    ("calf_r", "foot_r", "calf_r"),
-    ("foot_l", "ball_l", "foot_l"),
-    ("foot_r", "ball_r", "foot_r"),
-    ("neck_01", "head", "neck"),
+/// Limb segments: (bone, child bone whose head ends the segment, the names of its pieces).
+/// A segment of two pieces is two tapered capsules meeting at its middle, with the radius
+/// measured there too: the upper arm's, thigh's and calf's flesh bulges between the joints,
+/// which one taper from joint to joint misses (seed 000's collider body had 16 spheres and the
+/// capsules joining them; this one has 28 colliders).
+const LIMBS: [(&str, &str, &[&str]); 11] = [
+    (
+        "upperarm_l",
+        "lowerarm_l",
+        &["upperarm_l", "upperarm_l lower"],
+    ),
+    ("lowerarm_l", "hand_l", &["lowerarm_l"]),
+    (
+        "upperarm_r",
+        "lowerarm_r",
+        &["upperarm_r", "upperarm_r lower"],
+    ),
+    ("lowerarm_r", "hand_r", &["lowerarm_r"]),
+    ("thigh_l", "calf_l", &["thigh_l", "thigh_l lower"]),
+    ("calf_l", "foot_l", &["calf_l", "calf_l lower"]),
+    ("thigh_r", "calf_r", &["thigh_r", "thigh_r lower"]),
+    ("calf_r", "foot_r", &["calf_r", "calf_r lower"]),
+    ("foot_l", "ball_l", &["foot_l"]),
+    ("foot_r", "ball_r", &["foot_r"]),
+    ("neck_01", "head", &["neck"]),
 ];
+
+/// The radius percentile at a segment's middle, as a share of the ends' (the flesh there lies
+/// off the bone more than at the joints, to the biceps' or the calf's side: at the ends'
+/// percentile the middles stuck out of 8.1 % of a muscular body's skin by more than 1.5 cm,
+/// against 6.8 % at this share and 7.2 % with one capsule per segment).
+const MIDDLE_SHARE: f32 = 0.75;
 
 /// Bones covered by one sphere each: (bone, name).
 const BALLS: [(&str, &str); 3] = [("hand_l", "hand_l"), ("hand_r", "hand_r"), ("head", "head")];
@@ -101,7 +119,7 @@ const TRUNK: [(&str, &str, &str, &str); 4] = [
 
 /// The names [`BodyColliders::fit`] gives its colliders, in its order.
 pub fn collider_names() -> Vec<&'static str> {
-    let mut names: Vec<&'static str> = LIMBS.iter().map(|l| l.2).collect();
+    let mut names: Vec<&'static str> = LIMBS.iter().flat_map(|l| l.2.iter().copied()).collect();
     for (_, _, left, right) in TRUNK {
         names.extend([left, right]);
     }
@@ -199,24 +217,47 @@ impl BodyColliders {
         let inset = options.inset_m;
         let mut capsules = Vec::new();
 
-        for (name_b, child, name) in LIMBS {
+        for (name_b, child, names) in LIMBS {
             let b = bone(name_b)?;
             let a_pos = rest.heads[b];
             let skin = skin_of(b);
             let b_pos = rest.heads[bone(child)?];
-            let ra = percentile(radial(&skin, a_pos, b_pos, 0.0, 0.25), q);
-            let rb = percentile(radial(&skin, a_pos, b_pos, 0.75, 1.0), q);
-            let (Some(ra), Some(rb)) = (ra, rb) else {
-                continue;
-            };
-            capsules.push(BodyCapsule {
-                bone: b,
-                a: a_pos,
-                b: b_pos,
-                radius_a: (ra - inset).max(0.005),
-                radius_b: (rb - inset).max(0.005),
-                name,
-            });
+            // Stations along the segment (its ends, and its middle for two pieces) and the
+            // radius at each, from the skin within a quarter of the segment around it.
+            let pieces = names.len();
+            let stations: Vec<(f32, Option<f32>)> = (0..=pieces)
+                .map(|k| {
+                    let t = k as f32 / pieces as f32;
+                    let (lo, hi) = ((t - 0.125).max(0.0), (t + 0.125).min(1.0));
+                    let (lo, hi) = if k == 0 {
+                        (0.0, 0.25)
+                    } else if k == pieces {
+                        (0.75, 1.0)
+                    } else {
+                        (lo, hi)
+                    };
+                    let share = if k == 0 || k == pieces {
+                        q
+                    } else {
+                        MIDDLE_SHARE * q
+                    };
+                    (t, percentile(radial(&skin, a_pos, b_pos, lo, hi), share))
+                })
+                .collect();
+            for (k, &name) in names.iter().enumerate() {
+                let ((ta, ra), (tb, rb)) = (stations[k], stations[k + 1]);
+                let (Some(ra), Some(rb)) = (ra, rb) else {
+                    continue;
+                };
+                capsules.push(BodyCapsule {
+                    bone: b,
+                    a: a_pos.lerp(b_pos, ta),
+                    b: a_pos.lerp(b_pos, tb),
+                    radius_a: (ra - inset).max(0.005),
+                    radius_b: (rb - inset).max(0.005),
+                    name,
+                });
+            }
         }
 
         // Trunk: two capsules per segment, from the section's width and depth at each end.
