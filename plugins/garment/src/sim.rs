@@ -1222,11 +1222,9 @@ fn gap(q: Vec3, posed: &[(Vec3, Vec3, f32, f32)]) -> f32 {
 mod tests {
     use super::*;
 
-    /// The attachment targets and fitted colliders that the solver's threads pose together
-    /// ([`GarmentSim::pose_on_threads`]) are, to the bit, those that skinning every anchor and
-    /// fitting every collider one after another give.
-    #[test]
-    fn posing_on_the_solvers_threads_gives_the_serial_targets_and_colliders() {
+    /// The sun dress (size 38) on the default body, simulated on `threads` threads: the body
+    /// model, the garment, its simulation and the solver settings.
+    fn sun_dress(threads: usize) -> (BodyModel, SimGarment, GarmentSim, SolverSettings) {
         let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
         let model = BodyModel::read(&assets.join("bodies/makehuman.fitbody")).expect("the body");
         let shaped = model
@@ -1238,11 +1236,11 @@ mod tests {
             .build(&surface, "38", &crate::BuildOptions::default())
             .expect("the dress on the body");
         let settings = SolverSettings {
-            threads: 2,
+            threads: threads,
             ..SolverSettings::default()
         };
         let garment = SimGarment::from_mesh(&dress);
-        let mut sim = GarmentSim::new(
+        let sim = GarmentSim::new(
             &model,
             &shaped.positions,
             &shaped.rest_pose,
@@ -1250,6 +1248,15 @@ mod tests {
             settings,
         )
         .expect("a valid garment");
+        (model, garment, sim, settings)
+    }
+
+    /// The attachment targets and fitted colliders that the solver's threads pose together
+    /// ([`GarmentSim::pose_on_threads`]) are, to the bit, those that skinning every anchor and
+    /// fitting every collider one after another give.
+    #[test]
+    fn posing_on_the_solvers_threads_gives_the_serial_targets_and_colliders() {
+        let (model, _, mut sim, _) = sun_dress(2);
         let bones = model.bones.len();
         let still = vec![Affine3A::IDENTITY; bones];
         // Every bone a little differently turned and moved: the anchors blend them.
@@ -1345,29 +1352,7 @@ mod tests {
     /// masses; the static vertices left out are drawn where the skinning puts them.
     #[test]
     fn the_dress_solver_part_keeps_every_constraint_of_the_whole_dress() {
-        let assets = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets");
-        let model = BodyModel::read(&assets.join("bodies/makehuman.fitbody")).expect("the body");
-        let shaped = model
-            .shaped(&fitroom_body::Shape::default())
-            .expect("the default shape");
-        let surface = crate::BodySurface::new(&model, &shaped).expect("the body measures");
-        let dress = crate::Pattern::load(assets.join("garments/sundress.ron"))
-            .expect("the sun dress")
-            .build(&surface, "38", &crate::BuildOptions::default())
-            .expect("the dress on the body");
-        let settings = SolverSettings {
-            threads: 1,
-            ..SolverSettings::default()
-        };
-        let garment = SimGarment::from_mesh(&dress);
-        let mut sim = GarmentSim::new(
-            &model,
-            &shaped.positions,
-            &shaped.rest_pose,
-            &garment,
-            settings,
-        )
-        .expect("a valid garment");
+        let (model, garment, mut sim, settings) = sun_dress(1);
         let whole = ClothSolver::new(
             &ClothMesh::new(garment.positions.clone(), garment.triangles.clone())
                 .expect("the dress's mesh"),
