@@ -1236,7 +1236,7 @@ mod tests {
             .build(&surface, "38", &crate::BuildOptions::default())
             .expect("the dress on the body");
         let settings = SolverSettings {
-            threads: threads,
+            threads,
             ..SolverSettings::default()
         };
         let garment = SimGarment::from_mesh(&dress);
