@@ -7,10 +7,10 @@
 //! in a stride. Where a garment surely covers the body, the body need not be drawn at all (as
 //! games and fitting rooms do): a body vertex is *covered* when, in the pose the garment was
 //! placed in, a garment vertex lies over it (along its normal, at most [`COVER_GAP_M`] out
-//! and [`COVER_REACH_M`] to the side), and
-//! that garment vertex is at least [`COVER_MARGIN_M`] along the garment's surface from the
-//! garment's open edges where they are free (a hem, a sleeve's end), or [`STATIC_MARGIN_M`]
-//! where they follow the body (a skinned bodice's neckline). The margin keeps the skin near
+//! and [`COVER_REACH_M`] to the side), and that garment vertex is at least
+//! [`COVER_MARGIN_M`] along the garment's surface from the garment's open edges where they
+//! are free (a hem, a sleeve's end), or [`STATIC_MARGIN_M`] where they follow the body (a
+//! skinned bodice's neckline). The margin keeps the skin near
 //! an opening drawn, where a garment moving over the body uncovers it (a stride lifts a
 //! skirt's hem, a raised arm pulls up a sleeve). And the garment vertex must move with that
 //! skin: the body vertex nearest to it is driven by the same bone as the covered one, or by
