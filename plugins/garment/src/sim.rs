@@ -12,6 +12,8 @@
 //!   inside of a skinned bodice or of a wide band) cannot move the cloth; it is skinned when the
 //!   garment is read or drawn, not in every 120 Hz step.
 //! * The body collides as [`BodyColliders`] posed by the same transforms; the floor is a plane.
+//!   The forearms and hands yield to the trunk and thighs and are frictionless
+//!   ([`yield_to_body`]), so that an arm pushes a skirt aside without pinching it.
 //! * A blow-up (non-finite positions, absurd speed or stretch, reported by the solver's guard)
 //!   resets the garment to its skinned pose instead of crashing, and is counted.
 //!
@@ -187,9 +189,10 @@ const TELEPORT_M: f32 = 0.25;
 
 /// The skin offset kept over the body colliders, metres (the 3 mm). The colliders
 /// lie up to 1.5 cm inside the skin (up to 3 cm at the front of the thighs) so that they never
-/// stick out of it (see [`fitroom_body::colliders`]); the skin therefore shows through a tight
-/// skirt in places. A larger offset hides that but stretches the skirt against the skinned
-/// bodice until the stretch guard fires (tried: 8 and 20 mm).
+/// stick out of it (see [`fitroom_body::colliders`]); drawn as simulated, the skin would show
+/// through a tight skirt in places ([`RENDER_OFFSET_M`] and [`crate::cover`] hide it). A larger
+/// offset hides that but stretches the skirt against the skinned bodice until the stretch
+/// guard fires (tried: 8 and 20 mm).
 pub const BODY_SKIN_OFFSET_M: f32 = 0.003;
 
 /// How far out along its normals the simulated part of a garment is drawn, metres. The body
