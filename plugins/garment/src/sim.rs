@@ -13,7 +13,7 @@
 //!   garment is read or drawn, not in every 120 Hz step.
 //! * The body collides as [`BodyColliders`] posed by the same transforms; the floor is a plane.
 //!   The forearms and hands yield to the trunk and thighs and are frictionless
-//!   ([`yield_to_body`]), so that an arm pushes a skirt aside without pinching it.
+//!   (`yield_to_body`), so that an arm pushes a skirt aside without pinching it.
 //! * A blow-up (non-finite positions, absurd speed or stretch, reported by the solver's guard)
 //!   resets the garment to its skinned pose instead of crashing, and is counted.
 //!
