@@ -51,13 +51,13 @@ pub fn covered_skin(
     triangles: &[[u32; 3]],
     attached: &[u32],
 ) -> Result<Vec<bool>, SegmentError> {
+    // The dominant bone: the model lists each vertex's bones largest weight first.
     let bone_of: Vec<usize> = (0..body.len())
         .map(|v| {
-            let Some((j, w)) = model.skin_joints.get(v).zip(model.skin_weights.get(v)) else {
-                return usize::MAX;
-            };
-            let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-            j[k] as usize
+            model
+                .skin_joints
+                .get(v)
+                .map_or(usize::MAX, |j| j[0] as usize)
         })
         .collect();
     let related = |a: usize, b: usize| {
@@ -302,11 +302,7 @@ mod tests {
         let surface = crate::BodySurface::new(&model, &shaped).expect("the body measures");
         // Per body vertex, the name of its dominant bone.
         let bone_of: Vec<&str> = (0..n)
-            .map(|v| {
-                let (j, w) = (model.skin_joints[v], model.skin_weights[v]);
-                let k = (0..4).max_by(|&a, &b| w[a].total_cmp(&w[b])).unwrap_or(0);
-                model.bones[j[k] as usize].name.as_str()
-            })
+            .map(|v| model.bones[model.skin_joints[v][0] as usize].name.as_str())
             .collect();
         let share = |covered: &[bool], prefix: &[&str]| {
             let of: Vec<usize> = (0..n)
