@@ -110,11 +110,9 @@ pub struct GarmentSim {
     solver: ClothSolver,
     rest: Vec<Vec3>,
     triangles: Vec<[u32; 3]>,
-    /// The garment vertices of the solver's attached particles, in the solver's order (both
-    /// increasing).
+    /// The garment vertices of the solver's attached particles (`solver.attached()`), in the
+    /// solver's order (both increasing).
     attached: Vec<u32>,
-    /// The solver's attached particles (increasing).
-    attached_particles: Vec<u32>,
     /// Per solver particle: its garment vertex (increasing).
     particle_vertex: Vec<u32>,
     /// Per garment vertex: its solver particle, or [`NOT_SIMULATED`].
@@ -736,7 +734,6 @@ impl GarmentSim {
             rest: garment.positions.clone(),
             triangles: garment.triangles.clone(),
             attached,
-            attached_particles,
             particle_vertex,
             vertex_particle,
             skinning: Vec::new(),
@@ -1163,7 +1160,8 @@ impl GarmentSim {
             .iter()
             .enumerate()
             .filter(|(i, _)| {
-                self.attached_particles
+                self.solver
+                    .attached()
                     .binary_search(&((start + i) as u32))
                     .is_err()
             })
@@ -1371,7 +1369,7 @@ mod tests {
         assert_eq!(sim.solver.constraint_counts(), whole.constraint_counts());
         assert_eq!(sim.solver.tether_count(), whole.tether_count());
         for (p, &v) in sim.particle_vertex.iter().enumerate() {
-            if sim.attached_particles.binary_search(&(p as u32)).is_err() {
+            if sim.solver.attached().binary_search(&(p as u32)).is_err() {
                 assert_eq!(
                     sim.solver.masses()[p],
                     whole.masses()[v as usize],
