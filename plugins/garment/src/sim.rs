@@ -836,8 +836,9 @@ impl GarmentSim {
     }
 
     /// The body colliders posed by `skinning`, each shrunk where the garment's attached
-    /// (skinned) vertices `anchors` lie inside it (see [`fit_to_anchors`]).
-    /// Also returns the largest radius taken away, metres.
+    /// (skinned) vertices `anchors` lie inside it (see [`fit_to_anchors`]), and the forearms
+    /// and hands then yielding to the trunk and thighs ([`yield_to_body`]). Also returns the
+    /// largest radius taken away for the anchors, metres.
     fn posed_colliders(
         &self,
         skinning: &[Affine3A],
@@ -875,9 +876,10 @@ impl GarmentSim {
     }
 
     /// [`Self::anchors`] into `targets` and the `posed` colliders fitted to them
-    /// ([`fit_to_anchors`]; the same results), the work shared out to the solver's threads:
-    /// first the targets, in pieces, then the colliders, one at a time. Returns the largest
-    /// radius taken away and the number of threads that skinned the targets.
+    /// ([`Self::posed_colliders`]: fitted to the anchors, the arms yielding; the same results),
+    /// the work shared out to the solver's threads: first the targets, in pieces, then the
+    /// colliders, one at a time. Returns the largest radius taken away and the number of
+    /// threads that skinned the targets.
     fn pose_on_threads(
         &mut self,
         skinning: &[Affine3A],
@@ -931,6 +933,7 @@ impl GarmentSim {
             );
             largest = largest.max(apply_cuts(collider, cuts));
         }
+        yield_to_body(posed, &self.yielding, &self.firm, YIELD_CLEARANCE_M);
         (largest, threads)
     }
 
@@ -998,7 +1001,6 @@ impl GarmentSim {
         let mut posed = std::mem::take(&mut self.posed);
         self.colliders.posed_into(skinning, &mut posed);
         let (collider_shrink_m, _) = self.pose_on_threads(skinning, &mut targets, &mut posed);
-        yield_to_body(&mut posed, &self.yielding, &self.firm, YIELD_CLEARANCE_M);
         let jumped = self.last_targets.as_ref().is_some_and(|last| {
             last.iter()
                 .zip(&targets)
