@@ -159,6 +159,11 @@ pub struct GarmentSim {
 /// others have done its share.
 const POSE_PIECES: usize = 8;
 
+/// The fewest attached particles whose posing [`GarmentSim::step`] shares out to the solver's
+/// threads. Handing a job to the workers costs about as much as posing a few hundred: the
+/// 4,000-particle dress's 79 posed on one thread in 4.9 µs, shared out in 8.3 (session 15).
+const SHARED_POSING_MIN: usize = 512;
+
 /// One piece of the attachment targets: the targets, and their runs' bounds
 /// ([`anchor_runs_into`]).
 #[derive(Default)]
@@ -168,8 +173,10 @@ struct PosePiece {
 }
 
 /// What the solver's threads share out when [`GarmentSim::step`] poses the attachment targets
-/// and fits the colliders to them (together ~45 µs on the 4,000-particle dress: serial, this
-/// was a 15th of its step while the second thread waited), and when it measures the step.
+/// and fits the colliders to them (from [`SHARED_POSING_MIN`] attached particles: when the
+/// 4,000-particle dress attached all 766 of its bodice's, this took ~45 µs serial, a 15th of
+/// its step while the second thread waited; it attaches 79 since the solver steps only the
+/// part that moves), and when it measures the step.
 #[derive(Default)]
 struct Posing {
     pieces: Vec<Mutex<PosePiece>>,
@@ -178,6 +185,9 @@ struct Posing {
     /// What [`GarmentSim::measure_on_threads`] found so far, as `f32` bits.
     deepest: AtomicU32,
     strain: AtomicU32,
+    /// Attached particles from which the posing is shared out ([`SHARED_POSING_MIN`]; a
+    /// test lowers it).
+    shared_from: usize,
 }
 
 /// An attached vertex moving farther than this in one step means the body was teleported
@@ -756,6 +766,7 @@ impl GarmentSim {
             anchor_runs: Vec::new(),
             posing: Posing {
                 pieces: (0..POSE_PIECES).map(|_| Mutex::default()).collect(),
+                shared_from: SHARED_POSING_MIN,
                 ..Posing::default()
             },
         })
@@ -877,9 +888,10 @@ impl GarmentSim {
 
     /// [`Self::anchors`] into `targets` and the `posed` colliders fitted to them
     /// ([`Self::posed_colliders`]: fitted to the anchors, the arms yielding; the same results),
-    /// the work shared out to the solver's threads: first the targets, in pieces, then the
-    /// colliders, one at a time. Returns the largest radius taken away and the number of
-    /// threads that skinned the targets.
+    /// the work shared out to the solver's threads (from [`SHARED_POSING_MIN`] attached
+    /// particles on): first the targets, in pieces, then the colliders, one at a time.
+    /// Returns the largest radius taken away and the number of threads that skinned the
+    /// targets.
     fn pose_on_threads(
         &mut self,
         skinning: &[Affine3A],
@@ -890,7 +902,7 @@ impl GarmentSim {
         // Whole runs of anchors per piece, so that the pieces' runs are the runs of all.
         let piece = count.div_ceil(POSE_PIECES).next_multiple_of(ANCHOR_RUN);
         let pieces = &self.posing.pieces;
-        let threads = self.solver.share_out(pieces.len(), &|k| {
+        let pose_piece = |k: usize| {
             let mut guard = pieces[k].lock().unwrap_or_else(|e| e.into_inner());
             let PosePiece {
                 targets: piece_targets,
@@ -904,7 +916,14 @@ impl GarmentSim {
             );
             piece_runs.clear();
             anchor_runs_into(piece_targets, piece_runs);
-        });
+        };
+        let shared = count >= self.posing.shared_from;
+        let threads = if shared {
+            self.solver.share_out(pieces.len(), &pose_piece)
+        } else {
+            (0..pieces.len()).for_each(pose_piece);
+            1
+        };
         targets.clear();
         let runs = &mut self.anchor_runs;
         runs.clear();
@@ -919,11 +938,16 @@ impl GarmentSim {
         }
         let (cuts, runs, anchors) = (&self.posing.cuts, &self.anchor_runs, &targets[..]);
         let colliders = &*posed;
-        self.solver.share_out(colliders.len(), &|c| {
+        let cut = |c: usize| {
             let (a, b) = collider_cuts(&colliders[c], anchors, runs, BODY_SKIN_OFFSET_M);
             let bits = (u64::from(a.to_bits()) << 32) | u64::from(b.to_bits());
             cuts[c].store(bits, Ordering::Relaxed);
-        });
+        };
+        if shared {
+            self.solver.share_out(colliders.len(), &cut);
+        } else {
+            (0..colliders.len()).for_each(cut);
+        }
         let mut largest = 0.0f32;
         for (collider, bits) in posed.iter_mut().zip(&self.posing.cuts) {
             let bits = bits.load(Ordering::Relaxed);
@@ -1260,6 +1284,9 @@ mod tests {
     #[test]
     fn posing_on_the_solvers_threads_gives_the_serial_targets_and_colliders() {
         let (model, _, mut sim, _) = sun_dress(2);
+        // The dress has fewer attached particles than are shared out in the app.
+        assert!(sim.attached.len() < SHARED_POSING_MIN);
+        sim.posing.shared_from = 0;
         let bones = model.bones.len();
         let still = vec![Affine3A::IDENTITY; bones];
         // Every bone a little differently turned and moved: the anchors blend them.
