@@ -55,9 +55,9 @@
 //! only when the collider count or the substep count grows).
 //!
 //! A thread that the operating system deschedules while it holds an item stalls the others
-//! at the next synchronisation for the rest of its time slice (milliseconds). Each item is
-//! timed (two clock reads); when one took over a millisecond while the threads waited at least
-//! half as long, and that happened before within the last `SOLO_STEPS` steps, the next
+//! at the next synchronisation for the rest of its time slice (milliseconds). Items take
+//! microseconds, so when a thread waited over a millisecond at once for another's item, and
+//! that happened before within the last `SOLO_STEPS` steps, the next
 //! `SOLO_STEPS` steps (half a second) run on the caller's thread alone, which gives the same
 //! result; then the workers are tried again. On a machine shared with other busy processes
 //! this costs at most two slow steps in 120; a lone stall (a virtual machine's processor taken
@@ -96,9 +96,8 @@ const OVERLAP_ROUNDS: usize = 6;
 /// Longest joint push-out out of two shapes, in multiples of the deeper one's depth (the
 /// crease of two surfaces meeting at 60° or more).
 const CREASE_REACH: f32 = 2.0;
-/// A parallel step in which a thread spent longer than this in one work item (they take
-/// microseconds), while a thread waited at least half as long in all, was slowed down by the
-/// operating system descheduling the thread that held the item.
+/// A parallel step in which a thread waited longer than this at once for another's work item
+/// (they take microseconds) was slowed down by the operating system descheduling a thread.
 const STALL_MIN_NS: u64 = 1_000_000;
 /// Steps then run on the caller's thread alone before threads are tried again (half a second
 /// at 120 Hz).
@@ -1348,16 +1347,13 @@ impl ClothSolver {
             let threads = self.pool.threads();
             let job = |thread, threads| counters.run_phases(thread, threads, items, &exec);
             if threads > 1 && self.solo_steps == 0 {
-                let waited = AtomicU64::new(0);
-                let longest_item = AtomicU64::new(0);
+                let longest_wait = AtomicU64::new(0);
                 self.pool.run(&|thread| {
                     let times = job(thread, threads);
-                    waited.fetch_max(times.waited.as_nanos() as u64, Ordering::Relaxed);
-                    longest_item.fetch_max(times.longest_item.as_nanos() as u64, Ordering::Relaxed);
+                    longest_wait.fetch_max(times.longest_wait.as_nanos() as u64, Ordering::Relaxed);
                 });
-                let (waited, longest_item) = (waited.into_inner(), longest_item.into_inner());
                 self.since_stall = self.since_stall.saturating_add(1);
-                if longest_item > STALL_MIN_NS && 2 * waited >= longest_item {
+                if longest_wait.into_inner() > STALL_MIN_NS {
                     // A thread was descheduled while holding an item. Again (the machine is
                     // busy): run the next steps on the caller's thread alone. The results are
                     // the same.
