@@ -538,6 +538,11 @@ impl<'a, T: Copy> SharedSlice<'a, T> {
         }
     }
 
+    /// The number of elements.
+    pub fn len(&self) -> usize {
+        self.len
+    }
+
     /// The first element, for raw accesses under the same contract as [`Self::get`] and
     /// [`Self::set`].
     pub fn as_ptr(&self) -> *mut T {

@@ -483,6 +483,12 @@ struct ItemHealth {
 
 #[derive(Debug, Clone, Copy)]
 enum Phase {
+    /// The colliders swept over substep `sub` and the attachment targets at its end (one
+    /// item). Substep 0's opens the step; a later substep's follows the previous substep's
+    /// block phase, so that a thread that would wait for a seam does it.
+    Sweep {
+        sub: u32,
+    },
     AeroTriangles,
     /// Per group of collision chunks (a part of a block, see `PARTICLE_GROUPS`): finish
     /// substep `sub - 1` (if `sub > 0`) and predict substep `sub`. At `sub == 0` the group also
@@ -1284,7 +1290,7 @@ impl ClothSolver {
             lift: fabric.lift_coefficient,
             time: self.time as f32,
         };
-        self.prepare_substeps(substeps, settings.collision_thickness);
+        self.prepare_substeps(substeps);
         if inv_h2.to_bits() != self.inverse_for_inv_h2.to_bits() {
             self.model.constraints.inverse_denominators(
                 inv_h2,
@@ -1321,10 +1327,17 @@ impl ClothSolver {
                 model: &self.model,
                 k: constants,
                 phases: &self.phases,
-                swept: &self.swept,
+                swept: SharedSlice::new(&mut self.swept),
+                bodies: Bodies {
+                    start: &self.spheres_start,
+                    end: &self.spheres_end,
+                    capsules: &self.capsules,
+                    solo: &self.solo_spheres,
+                    target_end: &self.target_end,
+                },
                 planes: &self.planes,
                 target_start: &self.target_start,
-                anchors: &self.anchors,
+                anchors: SharedSlice::new(&mut self.anchors),
                 wind: self.wind.as_ref(),
                 x: SharedSlice::new(&mut self.x),
                 v: SharedSlice::new(&mut self.v),
@@ -1387,6 +1400,7 @@ impl ClothSolver {
             self.phases.push(phase);
             self.phase_items.push(items);
         };
+        push(Phase::Sweep { sub: 0 }, 1);
         if aero {
             let tris = self.model.triangles.len().div_ceil(TRIANGLE_ITEM) as u32;
             push(Phase::AeroTriangles, tris);
@@ -1396,6 +1410,9 @@ impl ClothSolver {
                 if iteration == 0 {
                     push(Phase::Particles { sub }, groups);
                     push(Phase::Block { sub }, blocks);
+                    if sub + 1 < substeps {
+                        push(Phase::Sweep { sub: sub + 1 }, 1);
+                    }
                 } else {
                     push(Phase::BlockIteration, blocks);
                 }
@@ -1444,6 +1461,8 @@ impl ClothSolver {
         let reach = &self.model.reach;
         let counters = &mut self.counters;
         let mut aero = None;
+        // Per substep: its sweep's phase.
+        let mut sweeps: Vec<u32> = Vec::new();
         let mut last_block: Option<u32> = None;
         // The phases of the separator levels since the last block phase.
         let mut separators: Vec<u32> = Vec::new();
@@ -1459,10 +1478,18 @@ impl ClothSolver {
         for (p, phase) in self.phases.iter().enumerate() {
             let pu = p as u32;
             match *phase {
+                // Waits for nothing: it reads only what the step was given.
+                Phase::Sweep { sub } => {
+                    debug_assert_eq!(sweeps.len(), sub as usize);
+                    sweeps.push(pu);
+                    counters.set_deps(p, 0, []);
+                }
                 Phase::AeroTriangles => aero = Some(pu),
-                Phase::Particles { .. } => {
+                Phase::Particles { sub } => {
+                    let sweep = sweeps[sub as usize];
                     for g in 0..blocks * PARTICLE_GROUPS {
                         deps.clear();
+                        deps.push(Dep::Item(sweep, 0));
                         match last_block {
                             Some(b) => {
                                 deps.push(Dep::Item(b, (g / PARTICLE_GROUPS) as u32));
@@ -1606,68 +1633,60 @@ impl ClothSolver {
     /// dress's 18 colliders and 766 targets on one thread). A substep computes the shapes at
     /// both its ends, so each thread needs only its own; the results do not depend on who
     /// computes them.
-    fn prepare_substeps(&mut self, substeps: u32, thickness: f32) {
+    /// Sizes the per-substep colliders and attachment targets for `substeps` substeps (the
+    /// step's `Phase::Sweep` items fill them).
+    fn prepare_substeps(&mut self, substeps: u32) {
         let count = self.capsules.len() + self.solo_spheres.len();
-        let attachments = self.target_start.len();
         let substeps = substeps as usize;
         let none = Shape::sphere(Vec3A::ZERO, 0.0);
         self.swept
             .resize(substeps * count, SweptCollider::new(none, none, 0.0));
-        self.anchors.resize(substeps * attachments, Vec3A::ZERO);
-        let (start, end) = (&self.spheres_start, &self.spheres_end);
-        let (capsules, solo) = (&self.capsules, &self.solo_spheres);
-        let (target_start, target_end) = (&self.target_start, &self.target_end);
-        let sphere_at = |s: u32, t: f32| -> (Vec3A, f32) {
-            let (a, b) = (start[s as usize], end[s as usize]);
-            (
-                Vec3A::from(a.center.lerp(b.center, t)),
-                a.radius + (b.radius - a.radius) * t,
-            )
-        };
-        // A collider's share of the fabric's friction.
-        let friction_of = |collider: usize| -> f32 {
-            match capsules.get(collider) {
-                Some(&[i, j]) => end[i as usize].friction.min(end[j as usize].friction),
-                None => end[solo[collider - capsules.len()] as usize].friction,
-            }
-        };
-        let shape_at = |collider: usize, t: f32| -> Shape {
-            if let Some(&[i, j]) = capsules.get(collider) {
-                let (a, ra) = sphere_at(i, t);
-                let (b, rb) = sphere_at(j, t);
-                Shape::round_cone(a, b, ra, rb)
-            } else {
-                let (c, r) = sphere_at(solo[collider - capsules.len()], t);
-                Shape::sphere(c, r)
-            }
-        };
-        let swept = SharedSlice::new(&mut self.swept);
-        let anchors = SharedSlice::new(&mut self.anchors);
-        let job = |sub: usize| {
-            let (t0, t1) = (
-                sub as f32 / substeps as f32,
-                (sub + 1) as f32 / substeps as f32,
-            );
-            for collider in 0..count {
-                let c =
-                    SweptCollider::new(shape_at(collider, t0), shape_at(collider, t1), thickness)
-                        .with_friction(friction_of(collider));
-                // SAFETY: substep `sub`'s slots are written by the thread that claimed it
-                // alone, and read by no one until every thread has returned.
-                unsafe { swept.set(sub * count + collider, c) };
-            }
-            for (slot, (a, b)) in target_start.iter().zip(target_end).enumerate() {
-                // SAFETY: as above.
-                unsafe { anchors.set(sub * attachments + slot, a.lerp(*b, t1)) };
-            }
-        };
-        share_out(
-            &self.pool,
-            self.solo_steps == 0,
-            &self.dispatching,
-            substeps,
-            &job,
-        );
+        self.anchors
+            .resize(substeps * self.target_start.len(), Vec3A::ZERO);
+    }
+}
+
+/// The body's spheres at the start and end of a step, how they make colliders, and where
+/// the attachment targets end: what the step's `Phase::Sweep` items read.
+#[derive(Clone, Copy)]
+struct Bodies<'a> {
+    start: &'a [Sphere],
+    end: &'a [Sphere],
+    capsules: &'a [[u32; 2]],
+    solo: &'a [u32],
+    target_end: &'a [Vec3A],
+}
+
+impl Bodies<'_> {
+    /// Sphere `s` at `t` of the step (0 at its start, 1 at its end).
+    fn sphere_at(&self, s: u32, t: f32) -> (Vec3A, f32) {
+        let (a, b) = (self.start[s as usize], self.end[s as usize]);
+        (
+            Vec3A::from(a.center.lerp(b.center, t)),
+            a.radius + (b.radius - a.radius) * t,
+        )
+    }
+
+    /// Collider `collider` (the capsules, then the spheres alone) at `t` of the step.
+    fn shape_at(&self, collider: usize, t: f32) -> Shape {
+        if let Some(&[i, j]) = self.capsules.get(collider) {
+            let (a, ra) = self.sphere_at(i, t);
+            let (b, rb) = self.sphere_at(j, t);
+            Shape::round_cone(a, b, ra, rb)
+        } else {
+            let (c, r) = self.sphere_at(self.solo[collider - self.capsules.len()], t);
+            Shape::sphere(c, r)
+        }
+    }
+
+    /// A collider's share of the fabric's friction.
+    fn friction_of(&self, collider: usize) -> f32 {
+        match self.capsules.get(collider) {
+            Some(&[i, j]) => self.end[i as usize]
+                .friction
+                .min(self.end[j as usize].friction),
+            None => self.end[self.solo[collider - self.capsules.len()] as usize].friction,
+        }
     }
 }
 
@@ -1714,11 +1733,16 @@ struct StepContext<'a> {
     model: &'a Model,
     k: StepConstants,
     phases: &'a [Phase],
-    swept: &'a [SweptCollider],
+    /// The colliders swept over each substep (`substep · colliders + collider`), written by
+    /// the substep's `Phase::Sweep` item, which everything that reads them waits for.
+    swept: SharedSlice<'a, SweptCollider>,
+    /// What the sweep items make them from.
+    bodies: Bodies<'a>,
     planes: &'a [Plane],
     target_start: &'a [Vec3A],
-    /// Attachment targets at the end of each substep (`substep · attachments + slot`).
-    anchors: &'a [Vec3A],
+    /// Attachment targets at the end of each substep (`substep · attachments + slot`),
+    /// written with the swept colliders.
+    anchors: SharedSlice<'a, Vec3A>,
     wind: Option<&'a Wind>,
     /// Mesh order.
     x: SharedSlice<'a, Vec3A>,
@@ -1742,6 +1766,7 @@ impl StepContext<'_> {
     fn exec(&self, phase: usize, item: u32) {
         let item = item as usize;
         match self.phases[phase] {
+            Phase::Sweep { sub } => self.sweep(sub),
             Phase::AeroTriangles => self.aero_triangles(item),
             Phase::Particles { sub } => self.group_particles(sub, item),
             Phase::Block { sub } => self.solve(item, true, sub == 0),
@@ -1914,7 +1939,54 @@ impl StepContext<'_> {
     /// Where attachment `slot` is at the end of substep `sub`.
     #[inline]
     fn anchor(&self, slot: u32, sub: u32) -> Vec3A {
-        self.anchors[sub as usize * self.target_start.len() + slot as usize]
+        self.anchors_of(sub)[slot as usize]
+    }
+
+    /// The attachment targets at the end of substep `sub`.
+    #[inline]
+    fn anchors_of(&self, sub: u32) -> &[Vec3A] {
+        let n = self.target_start.len();
+        debug_assert!((sub as usize + 1) * n <= self.anchors.len());
+        // SAFETY: in bounds (the sweep's slots); written by substep `sub`'s sweep item, which
+        // every item that reads them waits for, and not written again in the step.
+        unsafe { std::slice::from_raw_parts(self.anchors.as_ptr().add(sub as usize * n), n) }
+    }
+
+    /// The colliders swept over substep `sub`.
+    #[inline]
+    fn swept_of(&self, sub: u32) -> &[SweptCollider] {
+        let n = self.k.colliders;
+        debug_assert!((sub as usize + 1) * n <= self.swept.len());
+        // SAFETY: as for `anchors_of`.
+        unsafe { std::slice::from_raw_parts(self.swept.as_ptr().add(sub as usize * n), n) }
+    }
+
+    /// Sweeps the colliders over substep `sub` and moves the attachment targets to its end
+    /// (the `Phase::Sweep` item).
+    fn sweep(&self, sub: u32) {
+        let b = &self.bodies;
+        let (count, attachments) = (self.k.colliders, self.target_start.len());
+        let substeps = self.k.substeps;
+        let (t0, t1) = (
+            sub as f32 / substeps as f32,
+            (sub + 1) as f32 / substeps as f32,
+        );
+        let sub = sub as usize;
+        for collider in 0..count {
+            let c = SweptCollider::new(
+                b.shape_at(collider, t0),
+                b.shape_at(collider, t1),
+                self.k.thickness,
+            )
+            .with_friction(b.friction_of(collider));
+            // SAFETY: substep `sub`'s slots are written by this item alone, and read only by
+            // items that wait for it.
+            unsafe { self.swept.set(sub * count + collider, c) };
+        }
+        for (slot, (a, e)) in self.target_start.iter().zip(b.target_end).enumerate() {
+            // SAFETY: as above.
+            unsafe { self.anchors.set(sub * attachments + slot, a.lerp(*e, t1)) };
+        }
     }
 
     /// Puts particle `i` at `p` back within its tethers (see the module documentation).
@@ -1941,7 +2013,7 @@ impl StepContext<'_> {
     unsafe fn tethers8(&self, i: usize, sub: u32) {
         let m = self.model;
         let s = m.tether_start[i] as usize;
-        let anchors = self.anchors[sub as usize * self.target_start.len()..].as_ptr();
+        let anchors = self.anchors_of(sub).as_ptr();
         let p = &mut [Vec3A::ZERO; LANES];
         // SAFETY: slots index the attachments; `i..i + 8` belong to the calling item.
         let mut fallback = unsafe {
@@ -2033,7 +2105,7 @@ impl StepContext<'_> {
                     .all(|&slot| (slot as usize) < self.target_start.len())
             {
                 let slots = &m.attach_slot[i..i + LANES];
-                let anchors = &self.anchors[sub as usize * self.target_start.len()..];
+                let anchors = self.anchors_of(sub);
                 // SAFETY: particles `i..i + 8` belong to this item; their slots index the
                 // attachments (checked above).
                 unsafe {
@@ -2093,7 +2165,7 @@ impl StepContext<'_> {
     fn tethers_and_collisions(&self, sub: u32, range: std::ops::Range<usize>) {
         let k = &self.k;
         let m = self.model;
-        let colliders = &self.swept[sub as usize * k.colliders..(sub as usize + 1) * k.colliders];
+        let colliders = self.swept_of(sub);
         let mut low = Vec3A::splat(f32::INFINITY);
         let mut high = Vec3A::splat(f32::NEG_INFINITY);
         // SAFETY (whole function): particles of `range` belong to this item; attachment
