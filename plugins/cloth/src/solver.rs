@@ -1551,16 +1551,34 @@ impl ClothSolver {
                     }
                     separators.push(pu);
                 }
-                // After every group's finish (the phase before).
-                Phase::Stretch => {}
+                // A block's check after its groups' finish (the phase before), a separator's
+                // after the finish of the blocks it touches: one thread checks its block
+                // while the other finishes.
+                Phase::Stretch => {
+                    let groups = |x: u32| {
+                        let x = x as usize;
+                        (x * PARTICLE_GROUPS..(x + 1) * PARTICLE_GROUPS)
+                            .map(|g| Dep::Item(pu - 1, g as u32))
+                    };
+                    for item in 0..self.model.constraints.items.len() {
+                        deps.clear();
+                        if item < blocks {
+                            deps.extend(groups(item as u32));
+                        } else {
+                            for &x in reach.blocks.get(item - blocks) {
+                                deps.extend(groups(x));
+                            }
+                        }
+                        counters.set_deps(p, item as u32, deps.iter().copied());
+                    }
+                }
             }
-            // Per block or per particle group: pinned to the block's thread.
+            // Per block or per particle group: pinned to the block's thread. The step's last
+            // finish is not: each thread finishes what it can, as the threads' blocks take
+            // unequal times, and the particles leave the cores at the step's end anyway.
             let per_block = matches!(
                 phase,
-                Phase::Particles { .. }
-                    | Phase::Block { .. }
-                    | Phase::BlockIteration
-                    | Phase::Finish
+                Phase::Particles { .. } | Phase::Block { .. } | Phase::BlockIteration
             );
             if pin && per_block {
                 counters.pin(p);
@@ -2093,6 +2111,23 @@ impl StepContext<'_> {
                         [self.xs.as_ptr().add(i), self.xs_prev.as_ptr().add(i)],
                         self.external.as_ptr().add(i),
                         k,
+                    )
+                };
+                i += LANES;
+                continue;
+            }
+            if finish.is_some() && predict.is_none() && flags & EIGHT_FREE != 0 {
+                // SAFETY: particles `i..i + 8` belong to this item.
+                unsafe {
+                    finish_free(
+                        k.isa,
+                        [
+                            self.xs.as_ptr().add(i),
+                            self.xs_prev.as_ptr().add(i),
+                            self.vs.as_ptr().add(i),
+                        ],
+                        k.inv_h,
+                        k.max_velocity,
                     )
                 };
                 i += LANES;
@@ -3210,6 +3245,42 @@ unsafe fn integrate_free_with<L: Lanes>(
         let vel = (vel + a.scale(L::splat(k.h))).scale(L::splat(k.damping));
         L::scatter(xs_prev, &lanes, p);
         L::scatter(xs, &lanes, p + vel.scale(L::splat(k.h)));
+    }
+}
+
+/// The velocity of the step's last substep for eight consecutive free particles (`x`: their
+/// positions, positions at the substep start and velocities), as the one-particle path of
+/// [`StepContext::particles`] finishes it: what [`integrate_free`] computes before its
+/// prediction.
+///
+/// # Safety
+/// The eight particles belong to the calling item.
+#[inline]
+unsafe fn finish_free(isa: Isa, x: [*mut Vec3A; 3], inv_h: f32, max_velocity: f32) {
+    dispatch_lanes!(
+        isa,
+        finish_free_with(x: [*mut Vec3A; 3], inv_h: f32, max_velocity: f32)
+    )
+}
+
+#[inline(always)]
+unsafe fn finish_free_with<L: Lanes>(
+    [xs, xs_prev, vs]: [*mut Vec3A; 3],
+    inv_h: f32,
+    max_velocity: f32,
+) {
+    let lanes: [u32; LANES] = std::array::from_fn(|l| offset(l as u32));
+    // SAFETY: the caller's contract.
+    unsafe {
+        let p = L::gather(xs, &lanes);
+        let mut vel = (p - L::gather(xs_prev, &lanes)).scale(L::splat(inv_h));
+        let speed2 = vel.dot(vel);
+        let max = L::splat(max_velocity);
+        let fast = speed2.gt(max * max);
+        if fast.bits() != 0 {
+            vel = V3::select(fast, vel.scale(max.div(speed2.sqrt())), vel);
+        }
+        L::scatter(vs, &lanes, vel);
     }
 }
 
