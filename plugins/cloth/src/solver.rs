@@ -605,6 +605,8 @@ pub struct ClothSolver {
     solo_spheres: Vec<u32>,
     planes: Vec<Plane>,
     swept: Vec<SweptCollider>,
+    /// The swept colliders' bounds, eight colliders at a time (see [`ColliderBounds`]).
+    swept_bounds: Vec<ColliderBounds>,
     frame: FrameState,
     wind: Option<Wind>,
     time: f64,
@@ -868,6 +870,7 @@ impl ClothSolver {
             solo_spheres: Vec::new(),
             planes: Vec::new(),
             swept: Vec::new(),
+            swept_bounds: Vec::new(),
             frame: FrameState::default(),
             wind: None,
             time: 0.0,
@@ -1328,6 +1331,7 @@ impl ClothSolver {
                 k: constants,
                 phases: &self.phases,
                 swept: SharedSlice::new(&mut self.swept),
+                swept_bounds: SharedSlice::new(&mut self.swept_bounds),
                 bodies: Bodies {
                     start: &self.spheres_start,
                     end: &self.spheres_end,
@@ -1659,6 +1663,8 @@ impl ClothSolver {
         let none = Shape::sphere(Vec3A::ZERO, 0.0);
         self.swept
             .resize(substeps * count, SweptCollider::new(none, none, 0.0));
+        self.swept_bounds
+            .resize(substeps * count.div_ceil(LANES), ColliderBounds::EMPTY);
         self.anchors
             .resize(substeps * self.target_start.len(), Vec3A::ZERO);
     }
@@ -1754,6 +1760,8 @@ struct StepContext<'a> {
     /// The colliders swept over each substep (`substep · colliders + collider`), written by
     /// the substep's `Phase::Sweep` item, which everything that reads them waits for.
     swept: SharedSlice<'a, SweptCollider>,
+    /// Their bounds, eight at a time (`substep · ⌈colliders / 8⌉ + k`), written with them.
+    swept_bounds: SharedSlice<'a, ColliderBounds>,
     /// What the sweep items make them from.
     bodies: Bodies<'a>,
     planes: &'a [Plane],
@@ -1970,6 +1978,15 @@ impl StepContext<'_> {
         unsafe { std::slice::from_raw_parts(self.anchors.as_ptr().add(sub as usize * n), n) }
     }
 
+    /// The bounds of the colliders swept over substep `sub`, eight at a time.
+    #[inline]
+    fn swept_bounds_of(&self, sub: u32) -> &[ColliderBounds] {
+        let n = self.k.colliders.div_ceil(LANES);
+        debug_assert!((sub as usize + 1) * n <= self.swept_bounds.len());
+        // SAFETY: as for `anchors_of`.
+        unsafe { std::slice::from_raw_parts(self.swept_bounds.as_ptr().add(sub as usize * n), n) }
+    }
+
     /// The colliders swept over substep `sub`.
     #[inline]
     fn swept_of(&self, sub: u32) -> &[SweptCollider] {
@@ -1990,16 +2007,23 @@ impl StepContext<'_> {
             (sub + 1) as f32 / substeps as f32,
         );
         let sub = sub as usize;
-        for collider in 0..count {
-            let c = SweptCollider::new(
-                b.shape_at(collider, t0),
-                b.shape_at(collider, t1),
-                self.k.thickness,
-            )
-            .with_friction(b.friction_of(collider));
-            // SAFETY: substep `sub`'s slots are written by this item alone, and read only by
-            // items that wait for it.
-            unsafe { self.swept.set(sub * count + collider, c) };
+        let eights = count.div_ceil(LANES);
+        for eight in 0..eights {
+            let mut bounds = ColliderBounds::EMPTY;
+            for (l, collider) in (eight * LANES..count.min((eight + 1) * LANES)).enumerate() {
+                let c = SweptCollider::new(
+                    b.shape_at(collider, t0),
+                    b.shape_at(collider, t1),
+                    self.k.thickness,
+                )
+                .with_friction(b.friction_of(collider));
+                bounds.set(l, &c);
+                // SAFETY: substep `sub`'s slots are written by this item alone, and read only
+                // by items that wait for it.
+                unsafe { self.swept.set(sub * count + collider, c) };
+            }
+            // SAFETY: as above.
+            unsafe { self.swept_bounds.set(sub * eights + eight, bounds) };
         }
         for (slot, (a, e)) in self.target_start.iter().zip(b.target_end).enumerate() {
             // SAFETY: as above.
@@ -2262,12 +2286,18 @@ impl StepContext<'_> {
         const NEAR: usize = 64;
         let mut near = [0u16; NEAR];
         let mut count = 0usize;
-        for (c, collider) in colliders.iter().enumerate() {
-            if bounded && collider.overlaps(low, high) {
-                if count < NEAR {
-                    near[count] = c as u16;
+        if bounded {
+            for (eight, bounds) in self.swept_bounds_of(sub).iter().enumerate() {
+                // SAFETY: plain arithmetic on the bounds.
+                let mut hits = unsafe { overlaps8(k.isa, bounds, low, high) };
+                while hits != 0 {
+                    let c = eight * LANES + hits.trailing_zeros() as usize;
+                    hits &= hits - 1;
+                    if count < NEAR {
+                        near[count] = c as u16;
+                    }
+                    count += 1;
                 }
-                count += 1;
             }
         }
         let all: [u16; 0] = [];
@@ -3248,6 +3278,57 @@ unsafe fn integrate_free_with<L: Lanes>(
     }
 }
 
+/// The bounds of eight swept colliders, by axis (`min[axis][lane]`), so that a chunk of
+/// particles picks the colliders near it eight at a time ([`overlaps8`]); a lane without a
+/// collider has an empty box (the lowest corner +∞, the highest −∞), which meets nothing.
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+struct ColliderBounds {
+    min: [[f32; LANES]; 3],
+    max: [[f32; LANES]; 3],
+}
+
+impl ColliderBounds {
+    const EMPTY: Self = Self {
+        min: [[f32::INFINITY; LANES]; 3],
+        max: [[f32::NEG_INFINITY; LANES]; 3],
+    };
+
+    /// Puts `collider`'s bounds in lane `l`.
+    fn set(&mut self, l: usize, collider: &SweptCollider) {
+        let (lo, hi) = (collider.bounds_min, collider.bounds_max);
+        for axis in 0..3 {
+            self.min[axis][l] = lo[axis];
+            self.max[axis][l] = hi[axis];
+        }
+    }
+}
+
+/// The lanes of `bounds` whose box meets the box from `low` to `high`, as bits: the same
+/// comparisons as [`SweptCollider::overlaps`] makes for each.
+///
+/// # Safety
+/// None beyond the instruction set's (see `dispatch_lanes`).
+#[inline]
+unsafe fn overlaps8(isa: Isa, bounds: &ColliderBounds, low: Vec3A, high: Vec3A) -> u32 {
+    dispatch_lanes!(
+        isa,
+        overlaps8_with(bounds: &ColliderBounds, low: Vec3A, high: Vec3A) -> u32
+    )
+}
+
+#[inline(always)]
+unsafe fn overlaps8_with<L: Lanes>(bounds: &ColliderBounds, low: Vec3A, high: Vec3A) -> u32 {
+    let mut meets = L::splat(0.0).le(L::splat(0.0));
+    for axis in 0..3 {
+        let (lo, hi) = (L::load(&bounds.min[axis]), L::load(&bounds.max[axis]));
+        meets = meets
+            .and(lo.le(L::splat(high[axis])))
+            .and(L::splat(low[axis]).le(hi));
+    }
+    meets.bits()
+}
+
 /// The velocity of the step's last substep for eight consecutive free particles (`x`: their
 /// positions, positions at the substep start and velocities), as the one-particle path of
 /// [`StepContext::particles`] finishes it: what [`integrate_free`] computes before its
@@ -3364,6 +3445,48 @@ mod tests {
     fn random(seed: &mut u32) -> f32 {
         *seed = seed.wrapping_mul(1664525).wrapping_add(1013904223);
         (*seed >> 8) as f32 / (1u32 << 24) as f32
+    }
+
+    #[test]
+    fn eight_colliders_boxes_meet_a_chunk_as_each_one_alone_does() {
+        // Random spheres' swept boxes, five in a group of eight (three empty lanes), against
+        // random chunk boxes, some of them NaN: the lanes set are those whose collider's own
+        // test says it meets the chunk, on both instruction sets.
+        let mut seed = 4242u32;
+        let mut r = |scale: f32| (random(&mut seed) - 0.5) * scale;
+        let (mut met, mut missed) = (0, 0);
+        for round in 0..500 {
+            let colliders: Vec<SweptCollider> = (0..5)
+                .map(|_| {
+                    let a = Vec3A::new(r(1.0), r(1.0), r(1.0));
+                    let b = a + Vec3A::new(r(0.1), r(0.1), r(0.1));
+                    let radius = 0.02 + r(0.1).abs();
+                    SweptCollider::new(Shape::sphere(a, radius), Shape::sphere(b, radius), 0.003)
+                })
+                .collect();
+            let mut bounds = ColliderBounds::EMPTY;
+            for (l, c) in colliders.iter().enumerate() {
+                bounds.set(l, c);
+            }
+            let low = Vec3A::new(r(1.0), r(1.0), r(1.0)) - Vec3A::splat(0.25);
+            let mut high = low + Vec3A::new(r(1.0), r(1.0), r(1.0)) + Vec3A::splat(0.5);
+            if round % 50 == 0 {
+                high.y = f32::NAN;
+            }
+            let want = colliders
+                .iter()
+                .enumerate()
+                .filter(|(_, c)| c.overlaps(low, high))
+                .fold(0u32, |bits, (l, _)| bits | 1 << l);
+            met += want.count_ones();
+            missed += 5 - want.count_ones();
+            for isa in [Isa::Baseline, Isa::detect()] {
+                // SAFETY: the detected instruction set.
+                let got = unsafe { overlaps8(isa, &bounds, low, high) };
+                assert_eq!(got, want, "round {round} {isa:?}");
+            }
+        }
+        assert!(met > 100 && missed > 100, "{met} met, {missed} missed");
     }
 
     #[test]
