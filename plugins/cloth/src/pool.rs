@@ -298,6 +298,8 @@ pub(crate) struct PhaseCounters {
     /// Per phase: whether its items are pinned to threads ([`Self::pin`]).
     pinned: Vec<bool>,
     abort: AtomicBool,
+    /// Threads that have entered [`Self::run_phases`] in this run.
+    joined: AtomicUsize,
 }
 
 /// How many phases past the earliest one with unclaimed items a thread looks for a ready item.
@@ -315,6 +317,7 @@ impl PhaseCounters {
             deps: Vec::new(),
             pinned: Vec::new(),
             abort: AtomicBool::new(false),
+            joined: AtomicUsize::new(0),
         }
     }
 
@@ -353,6 +356,7 @@ impl PhaseCounters {
             *counter.0.get_mut() = 0;
         }
         *self.abort.get_mut() = false;
+        *self.joined.get_mut() = 0;
     }
 
     /// Gives item `k` of phase `p` the dependencies `deps`, instead of the whole previous
@@ -407,10 +411,11 @@ impl PhaseCounters {
     /// out of its own work, instead of to the one that finished its block last (which then
     /// worked 30 µs a step longer than the other on the 4,000-particle dress; session 15).
     ///
-    /// Returns the longest time this thread waited at once with nothing ready (an item
-    /// normally takes microseconds: a wait of milliseconds means that the operating system
-    /// descheduled a thread that held an item). Items are not timed: two clock reads an
-    /// item cost the 4,000-particle dress's step 2 % (session 15).
+    /// Returns the longest time this thread waited at once with nothing ready, once every
+    /// thread had joined (an item normally takes microseconds: a wait of milliseconds means
+    /// that the operating system descheduled a thread that held an item; a worker that is
+    /// still waking up holds none, and the next steps find it awake). Items are not timed:
+    /// two clock reads an item cost the 4,000-particle dress's step 2 % (session 15).
     pub fn run_phases(
         &self,
         thread: usize,
@@ -420,7 +425,10 @@ impl PhaseCounters {
     ) -> PhaseTimes {
         let mut times = PhaseTimes::default();
         let mut cursor = 0usize;
-        let mut idle: Option<(std::time::Instant, u32)> = None;
+        self.joined.fetch_add(1, Ordering::Relaxed);
+        // A wait: since when, spins so far, and whether every thread had joined when it
+        // began (a wait for a thread still waking up holds no one's item: not a stall).
+        let mut idle: Option<(std::time::Instant, u32, bool)> = None;
         loop {
             while cursor < items.len()
                 && self.taken[cursor].0.load(Ordering::Relaxed) >= items[cursor]
@@ -456,8 +464,8 @@ impl PhaseCounters {
                         continue;
                     }
                     self.taken[p].0.fetch_add(1, Ordering::Relaxed);
-                    if let Some((since, _)) = idle.take() {
-                        times.add_wait(since.elapsed());
+                    if let Some((since, _, all)) = idle.take() {
+                        times.add_wait(since.elapsed(), all);
                     }
                     let guard = AbortOnUnwind(&self.abort);
                     exec(p, k as u32);
@@ -475,7 +483,10 @@ impl PhaseCounters {
             if self.abort.load(Ordering::Relaxed) {
                 break;
             }
-            let (_, spins) = idle.get_or_insert_with(|| (std::time::Instant::now(), 0));
+            let (_, spins, _) = idle.get_or_insert_with(|| {
+                let all = self.joined.load(Ordering::Relaxed) >= threads;
+                (std::time::Instant::now(), 0, all)
+            });
             if *spins < 4_000 {
                 std::hint::spin_loop();
                 *spins += 1;
@@ -483,8 +494,8 @@ impl PhaseCounters {
                 std::thread::yield_now();
             }
         }
-        if let Some((since, _)) = idle {
-            times.add_wait(since.elapsed());
+        if let Some((since, _, all)) = idle {
+            times.add_wait(since.elapsed(), all);
         }
         times
     }
@@ -493,13 +504,16 @@ impl PhaseCounters {
 /// What [`PhaseCounters::run_phases`] measured on one thread.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct PhaseTimes {
-    /// The longest time this thread waited at once for other threads' items.
+    /// The longest time this thread waited at once for other threads' items, counting only
+    /// waits that began once every thread had joined the run.
     pub longest_wait: std::time::Duration,
 }
 
 impl PhaseTimes {
-    fn add_wait(&mut self, wait: std::time::Duration) {
-        self.longest_wait = self.longest_wait.max(wait);
+    fn add_wait(&mut self, wait: std::time::Duration, all_joined: bool) {
+        if all_joined {
+            self.longest_wait = self.longest_wait.max(wait);
+        }
     }
 }
 
@@ -747,6 +761,28 @@ mod tests {
         let waits: Vec<u64> = longest.iter().map(|w| w.load(Ordering::SeqCst)).collect();
         // The thread that did not hold the item waited for all of it.
         assert!(waits.iter().any(|&w| w >= 3_000_000), "{waits:?}");
+    }
+
+    #[test]
+    fn a_wait_for_a_thread_that_has_not_joined_is_no_stall() {
+        // Phase 0: an item pinned to each thread; phase 1 waits for both. The worker joins
+        // 3 ms late: the caller waits for it, but that wait began before it joined.
+        let pool = WorkerPool::new(2);
+        let mut counters = PhaseCounters::new();
+        let items = [2u32, 1];
+        counters.reset(&items);
+        counters.pin(0);
+        let exec = |_p: usize, _k: u32| {};
+        let longest: Vec<AtomicU64> = (0..2).map(|_| AtomicU64::new(0)).collect();
+        pool.run(&|thread| {
+            if thread == 1 {
+                std::thread::sleep(std::time::Duration::from_millis(3));
+            }
+            let times = counters.run_phases(thread, 2, &items, &exec);
+            longest[thread].store(times.longest_wait.as_nanos() as u64, Ordering::SeqCst);
+        });
+        let caller = longest[0].load(Ordering::SeqCst);
+        assert!(caller < 1_000_000, "the caller's wait counted: {caller} ns");
     }
 
     #[test]

@@ -56,10 +56,11 @@
 //!
 //! A thread that the operating system deschedules while it holds an item stalls the others
 //! at the next synchronisation for the rest of its time slice (milliseconds). Items take
-//! microseconds, so when a thread waited over a millisecond at once for another's item, and
-//! that happened before within the last `SOLO_STEPS` steps, the next
-//! `SOLO_STEPS` steps (half a second) run on the caller's thread alone, which gives the same
-//! result; then the workers are tried again. On a machine shared with other busy processes
+//! microseconds, so when a thread waited over a millisecond at once for another's item (a
+//! wait that began before every thread had joined the step does not count: a worker still
+//! waking up holds no item), and that happened before within the last `SOLO_STEPS` steps,
+//! the next `SOLO_STEPS` steps (half a second) run on the caller's thread alone, which gives
+//! the same result; then the workers are tried again. On a machine shared with other busy processes
 //! this costs at most two slow steps in 120; a lone stall (a virtual machine's processor taken
 //! away for a moment) costs only itself.
 
