@@ -109,14 +109,25 @@ pub(crate) struct BendBatch {
     /// The inverse masses of the four vertices: the step of vertex `i` per unit `Δλ` is
     /// `wᵢ Kᵢ`, and the pairs' particles move by the same `wᵢ`.
     pub w: [[f32; LANES]; 4],
-    /// Rest value of `C` in the stencil frame (edge, normal, binormal); zero when flat.
-    pub rest: [[f32; LANES]; 3],
     /// The distance constraints solved with the stencil (see "Pairs" in the module
     /// documentation): pair 0 is `x₀x₁`, pair 1 `x₂x₃`. Rest length ([`NO_PAIR_REST`] in a
     /// lane without that pair, whose inverse denominator is then zero, so it changes
     /// nothing).
     pub drest: [[f32; LANES]; 2],
-    pub dcompliance: [[f32; LANES]; 2],
+}
+
+/// What a bending batch needs only now and then, kept apart from [`BendBatch`], which every
+/// substep streams through the cache (a tenth smaller without the pairs' compliance alone:
+/// the bending kernel took 3-4 % less time; session 15).
+#[derive(Debug, Clone, Copy, PartialEq)]
+#[repr(C, align(32))]
+pub(crate) struct BendSide {
+    /// Rest value of `C` in the stencil frame (edge, normal, binormal); zero when flat. Read
+    /// when the frame is taken, at a step's first constraint pass.
+    pub rest: [[f32; LANES]; 3],
+    /// The pairs' compliance, 1/(N·m): read for their inverse denominators, and by further
+    /// constraint iterations.
+    pub pair_compliance: [[f32; LANES]; 2],
 }
 
 /// Eight distance constraints for the stretch check: the two particles (byte offsets) and
@@ -210,6 +221,8 @@ pub(crate) struct ConstraintSet {
     /// Distance constraints solved on their own (those no bending stencil carries).
     pub distance: Vec<DistanceBatch>,
     pub bend: Vec<BendBatch>,
+    /// Per bending batch: what it needs now and then.
+    pub bend_side: Vec<BendSide>,
     /// Every distance constraint, for the stretch check.
     pub check: Vec<CheckBatch>,
     pub runs: Vec<Run>,
@@ -516,7 +529,9 @@ impl ConstraintSet {
                         }
                         let kind = RunKind::Bend { curved, pairs };
                         let b = set.bend.len() as u32;
+                        let (batch, side) = batch;
                         set.bend.push(batch);
+                        set.bend_side.push(side);
                         let in_colour = set.runs.len() > first_run;
                         match set.runs.last_mut() {
                             Some(run) if in_colour && run.kind == kind && run.batches.1 == b => {
@@ -580,13 +595,15 @@ impl ConstraintSet {
         }));
         let alpha = self.bend_compliance * inv_h2;
         bend.clear();
-        bend.extend(self.bend.iter().map(|c| {
+        bend.extend(self.bend.iter().zip(&self.bend_side).map(|(c, side)| {
             let pair = |p: usize| -> [f32; LANES] {
                 std::array::from_fn(|l| {
                     if c.drest[p][l] == NO_PAIR_REST {
                         0.0
                     } else {
-                        1.0 / (c.w[2 * p][l] + c.w[2 * p + 1][l] + c.dcompliance[p][l] * inv_h2)
+                        1.0 / (c.w[2 * p][l]
+                            + c.w[2 * p + 1][l]
+                            + side.pair_compliance[p][l] * inv_h2)
                     }
                 })
             };
@@ -680,16 +697,18 @@ fn bend_batch(
     distance: &[DistanceConstraint],
     lanes: [u32; LANES],
     padding: u32,
-) -> BendBatch {
+) -> (BendBatch, BendSide) {
+    let mut side = BendSide {
+        rest: [[0.0; LANES]; 3],
+        pair_compliance: [[0.0; LANES]; 2],
+    };
     let mut b = BendBatch {
         v: [[offset(padding); LANES]; 4],
         // Empty lanes: zero weights (a harmless non-zero denominator, see
         // `inverse_denominators`) and no pairs.
         k: [[0.0; LANES]; 4],
         w: [[0.0; LANES]; 4],
-        rest: [[0.0; LANES]; 3],
         drest: [[NO_PAIR_REST; LANES]; 2],
-        dcompliance: [[0.0; LANES]; 2],
     };
     for (l, &k) in lanes.iter().enumerate() {
         if k == NONE {
@@ -702,7 +721,7 @@ fn bend_batch(
             }
             let d = &distance[d as usize];
             b.drest[p][l] = d.rest;
-            b.dcompliance[p][l] = d.compliance;
+            side.pair_compliance[p][l] = d.compliance;
         }
         for q in 0..4 {
             b.v[q][l] = offset(c.v[q]);
@@ -710,10 +729,10 @@ fn bend_batch(
             b.w[q][l] = c.w[q];
         }
         for q in 0..3 {
-            b.rest[q][l] = c.rest[q];
+            side.rest[q][l] = c.rest[q];
         }
     }
-    b
+    (b, side)
 }
 
 /// Greedy packing of constraints into batches whose lanes share no particle.
@@ -997,7 +1016,7 @@ pub(crate) unsafe fn solve_bend(
     isa: Isa,
     frame: BendFrame<'_, '_>,
     pairs: u8,
-    batches: &[BendBatch],
+    (batches, side): (&[BendBatch], &[BendSide]),
     inverse_denominator: &[[[f32; LANES]; 3]],
     lambda: Option<(&SharedSlice<'_, [[f32; LANES]; 5]>, usize)>,
     x: *mut Vec3A,
@@ -1011,6 +1030,7 @@ pub(crate) unsafe fn solve_bend(
     };
     let args = BendArgs {
         batches,
+        side,
         inverse_denominator,
         lambda,
         x,
@@ -1045,6 +1065,7 @@ pub(crate) unsafe fn solve_bend(
 #[derive(Clone, Copy)]
 struct BendArgs<'a, 's> {
     batches: &'a [BendBatch],
+    side: &'a [BendSide],
     inverse_denominator: &'a [[[f32; LANES]; 3]],
     lambda: Option<(&'a SharedSlice<'s, [[f32; LANES]; 5]>, usize)>,
     x: *mut Vec3A,
@@ -1059,6 +1080,7 @@ struct BendArgs<'a, 's> {
 #[inline(always)]
 unsafe fn bend_kernel<L: Lanes, const MODE: u8, const PAIRS: u8>(a: BendArgs<'_, '_>) {
     let (lambda, x, first, targets) = (a.lambda, a.x, a.first, a.targets);
+    let side = a.side;
     let alpha = L::splat(a.alpha);
     let inv_h2 = L::splat(a.inv_h2);
     for (k, (c, inv)) in a.batches.iter().zip(a.inverse_denominator).enumerate() {
@@ -1094,7 +1116,7 @@ unsafe fn bend_kernel<L: Lanes, const MODE: u8, const PAIRS: u8>(a: BendArgs<'_,
                 let t = e1.scale(nl * inv_both);
                 let n = normal.scale(el * inv_both);
                 let b = t.cross(n);
-                let rest = V3::load(&c.rest);
+                let rest = V3::load(&side[k].rest);
                 let target = b
                     .mul_add(rest.z, n.mul_add(rest.y, t.scale(rest.x)))
                     .and(framed);
@@ -1148,11 +1170,16 @@ unsafe fn bend_kernel<L: Lanes, const MODE: u8, const PAIRS: u8>(a: BendArgs<'_,
                     Some(kept) => Some(L::load(&kept[3 + pair])),
                     None => None,
                 };
+                // (The compliance only weighs a kept λ.)
+                let alpha = match &kept {
+                    Some(_) => L::load(&side[k].pair_compliance[pair]) * inv_h2,
+                    None => L::splat(0.0),
+                };
                 let (pa, pb, lam) = project_pair(
                     (p[a], p[b]),
                     (L::load(&c.w[a]), L::load(&c.w[b])),
                     L::load(&c.drest[pair]),
-                    L::load(&c.dcompliance[pair]) * inv_h2,
+                    alpha,
                     L::load(&inv[1 + pair]),
                     lam,
                 );
@@ -1386,8 +1413,8 @@ mod tests {
         let (set, _) = build(&tube, &vec![1.0; tube.vertex_count()]);
         assert!(set.runs.iter().any(|r| is_curved(r.kind)));
         for run in set.runs.iter().filter(|r| r.kind != RunKind::Distance) {
-            for b in &set.bend[run.batches.0 as usize..run.batches.1 as usize] {
-                let curved = b.rest.iter().flatten().any(|&r| r != 0.0);
+            for side in &set.bend_side[run.batches.0 as usize..run.batches.1 as usize] {
+                let curved = side.rest.iter().flatten().any(|&r| r != 0.0);
                 assert_eq!(curved, is_curved(run.kind));
             }
         }

@@ -1842,7 +1842,7 @@ impl StepContext<'_> {
                             (true, false) => BendFrame::Held(&self.bend_targets, a),
                         },
                         pairs,
-                        &c.bend[a..b],
+                        (&c.bend[a..b], &c.bend_side[a..b]),
                         &self.bend_inverse[a..b],
                         keep.then_some((&self.bend_lambda, a)),
                         x,
