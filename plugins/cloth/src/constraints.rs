@@ -515,7 +515,7 @@ impl ConstraintSet {
                     let first_run = set.runs.len();
                     for lanes in packer.pack(&ids, |k| bend[(k - bend_base) as usize].v) {
                         let lanes = lanes.map(|k| if k == NONE { NONE } else { k - bend_base });
-                        let batch = bend_batch(&bend, &distance, lanes, padding);
+                        let (batch, side) = bend_batch(&bend, &distance, lanes, padding);
                         // Curved if any lane is, with as many pairs as the lane with most.
                         let (mut curved, mut pairs) = (false, 0);
                         for &k in lanes.iter().filter(|&&k| k != NONE) {
@@ -529,7 +529,6 @@ impl ConstraintSet {
                         }
                         let kind = RunKind::Bend { curved, pairs };
                         let b = set.bend.len() as u32;
-                        let (batch, side) = batch;
                         set.bend.push(batch);
                         set.bend_side.push(side);
                         let in_colour = set.runs.len() > first_run;

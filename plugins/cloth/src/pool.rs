@@ -8,9 +8,9 @@
 //! other blocks. Every thread — the caller's and the pool's workers — runs the same loop:
 //! claim (one atomic flag each) and run the first item whose dependencies are finished,
 //! looking from the earliest phase with unclaimed items a few phases ahead, at the items
-//! pinned to it first. Each thread starts
-//! looking at its own place in a phase's list, so that it tends to get the same blocks in every
-//! substep and finds their particles and constraints in its cache. Because the items and
+//! pinned to it first. Each thread starts looking at its own place in a phase's list, so that
+//! it tends to get the same blocks in every substep and finds their particles and constraints
+//! in its cache. Because the items and
 //! their contents do not depend on which thread runs them, and each runs after what it reads
 //! has been written, the result is bit-for-bit the same for any number of threads.
 //!

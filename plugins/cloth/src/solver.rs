@@ -60,9 +60,9 @@
 //! wait that began before every thread had joined the step does not count: a worker still
 //! waking up holds no item), and that happened before within the last `SOLO_STEPS` steps,
 //! the next `SOLO_STEPS` steps (half a second) run on the caller's thread alone, which gives
-//! the same result; then the workers are tried again. On a machine shared with other busy processes
-//! this costs at most two slow steps in 120; a lone stall (a virtual machine's processor taken
-//! away for a moment) costs only itself.
+//! the same result; then the workers are tried again. On a machine shared with other busy
+//! processes this costs at most two slow steps in 120; a lone stall (a virtual machine's
+//! processor taken away for a moment) costs only itself.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, AtomicUsize, Ordering};
 
@@ -1650,14 +1650,11 @@ impl ClothSolver {
         }
     }
 
-    /// Interpolates every collider to every substep boundary ([`SweptCollider`]s, substep by
-    /// substep) and the attachment targets to every substep's end, the substeps shared out to
-    /// the threads that are awake ([`Self::share_out`]; ~15 µs for the 4,000-particle
-    /// dress's 18 colliders and 766 targets on one thread). A substep computes the shapes at
-    /// both its ends, so each thread needs only its own; the results do not depend on who
-    /// computes them.
-    /// Sizes the per-substep colliders and attachment targets for `substeps` substeps (the
-    /// step's `Phase::Sweep` items fill them).
+    /// Sizes the per-substep colliders and attachment targets for `substeps` substeps. The
+    /// step's `Phase::Sweep` items fill them, one substep each, inside the parallel step
+    /// (made here before it, shared out, they kept the second thread idle for ~10 µs of the
+    /// 4,000-particle dress's step; session 15). A substep computes the shapes at both its
+    /// ends, so the results do not depend on which thread sweeps which substep.
     fn prepare_substeps(&mut self, substeps: u32) {
         let count = self.capsules.len() + self.solo_spheres.len();
         let substeps = substeps as usize;
@@ -2289,7 +2286,7 @@ impl StepContext<'_> {
         let mut count = 0usize;
         if bounded {
             for (eight, bounds) in self.swept_bounds_of(sub).iter().enumerate() {
-                // SAFETY: plain arithmetic on the bounds.
+                // SAFETY: the instruction set detected.
                 let mut hits = unsafe { overlaps8(k.isa, bounds, low, high) };
                 while hits != 0 {
                     let c = eight * LANES + hits.trailing_zeros() as usize;
