@@ -224,22 +224,12 @@ mod tests {
     /// its edges or beyond it are not, nor any facing away from the sheet with it behind.
     #[test]
     fn a_sheet_covers_the_skin_under_its_inside_only() {
-        let n = 51u32;
+        // A 1 m square sheet of 2 cm cells, 2 cm over the skin.
         let step = 0.02f32;
-        let mut garment = Vec::new();
-        for j in 0..n {
-            for i in 0..n {
-                garment.push(Vec3::new(i as f32 * step, j as f32 * step, 0.02));
-            }
-        }
-        let mut triangles = Vec::new();
-        for j in 0..n - 1 {
-            for i in 0..n - 1 {
-                let a = j * n + i;
-                triangles.push([a, a + 1, a + n + 1]);
-                triangles.push([a, a + n + 1, a + n]);
-            }
-        }
+        let sheet =
+            fitroom_cloth::ClothMesh::grid(Vec3::new(0.0, 0.0, 0.02), Vec3::X, Vec3::Y, 50, 50)
+                .expect("a valid grid");
+        let (garment, triangles) = (sheet.positions(), sheet.triangles());
         let mut body = Vec::new();
         for j in -4..30 {
             for i in -4..30 {
@@ -249,7 +239,7 @@ mod tests {
         let up = vec![Vec3::Z; body.len()];
         let bones = vec![0; body.len()];
         let same = |a: usize, b: usize| a == b;
-        let sheet = (&garment[..], &triangles[..], &[][..]);
+        let sheet = (garment, triangles, &[][..]);
         let covered = covered_by((&body, &up, &bones), &same, sheet).expect("a valid sheet");
         // Distance along the sheet from its edges is at least the distance in the plane from
         // its border square (edges run along the grid and its diagonals).
