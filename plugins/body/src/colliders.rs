@@ -228,18 +228,11 @@ impl BodyColliders {
             let stations: Vec<(f32, Option<f32>)> = (0..=pieces)
                 .map(|k| {
                     let t = k as f32 / pieces as f32;
-                    let (lo, hi) = ((t - 0.125).max(0.0), (t + 0.125).min(1.0));
-                    let (lo, hi) = if k == 0 {
-                        (0.0, 0.25)
-                    } else if k == pieces {
-                        (0.75, 1.0)
-                    } else {
-                        (lo, hi)
-                    };
-                    let share = if k == 0 || k == pieces {
-                        q
-                    } else {
-                        MIDDLE_SHARE * q
+                    // A quarter of the segment: at its ends, the quarter inside it.
+                    let ((lo, hi), share) = match k {
+                        0 => ((0.0, 0.25), q),
+                        k if k == pieces => ((0.75, 1.0), q),
+                        _ => ((t - 0.125, t + 0.125), MIDDLE_SHARE * q),
                     };
                     (t, percentile(radial(&skin, a_pos, b_pos, lo, hi), share))
                 })
