@@ -22,7 +22,7 @@
 //!   §4.3) ([`frame`]);
 //! - particles ordered by a **recursive bisection** of the rest shape into compact blocks,
 //!   whose constraints are solved on worker threads block by block, then along the seams and
-//!   corners between blocks, in **SIMD batches** of eight (SSE2, or AVX and FMA where the
+//!   corners between blocks, in **SIMD batches** of eight (SSE2, or AVX2 and FMA where the
 //!   processor has them, with identical results), with results that do not depend on the
 //!   thread count ([`constraints`], [`pool`]);
 //! - a **blow-up guard** and [`ClothSolver::reset_to`].

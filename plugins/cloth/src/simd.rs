@@ -9,7 +9,9 @@
 //!
 //! The kernels are written once over the `Lanes` trait and compiled twice: with two SSE2
 //! registers per batch (the x86-64 baseline; plain arrays on other architectures) and with
-//! one AVX register (with FMA), chosen at run time (`Isa::detect`). Only IEEE-754 additions,
+//! one AVX register on processors of the x86-64-v3 level (AVX2, FMA, BMI1/2, LZCNT, POPCNT:
+//! every Intel processor with AVX2 since 2013, AMD since 2015), chosen at run time
+//! (`Isa::detect`). Only IEEE-754 additions,
 //! multiplications, fused multiply-adds, divisions and square roots are used — no
 //! approximate reciprocals — each rounded exactly once, so every implementation gives the
 //! same bits: the AVX kernels fuse with the processor's FMA instructions, the baseline lane
@@ -960,7 +962,10 @@ impl Lanes for Scalar8 {
 pub(crate) enum Isa {
     /// Two SSE registers per eight lanes (or plain arrays off x86-64).
     Baseline,
-    /// One AVX register per eight lanes, with FMA (every AVX2 processor has both).
+    /// One AVX register per eight lanes, on an x86-64-v3 processor (AVX, AVX2, FMA, BMI1,
+    /// BMI2, LZCNT, POPCNT): the kernels and the step's work items around them
+    /// (`crate::solver`) are compiled for that level; it is the string every
+    /// `#[target_feature(enable = …)]` of this crate gives.
     Avx,
 }
 
@@ -968,7 +973,13 @@ impl Isa {
     /// The best one this processor has.
     pub fn detect() -> Self {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx") && std::arch::is_x86_feature_detected!("fma")
+        if std::arch::is_x86_feature_detected!("avx")
+            && std::arch::is_x86_feature_detected!("avx2")
+            && std::arch::is_x86_feature_detected!("fma")
+            && std::arch::is_x86_feature_detected!("bmi1")
+            && std::arch::is_x86_feature_detected!("bmi2")
+            && std::arch::is_x86_feature_detected!("lzcnt")
+            && std::arch::is_x86_feature_detected!("popcnt")
         {
             return Isa::Avx;
         }
@@ -984,7 +995,7 @@ impl Isa {
 macro_rules! dispatch_lanes {
     ($isa:expr, $kernel:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?) => {{
         #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx,fma")]
+        #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
         unsafe fn avx($($arg: $ty),*) $(-> $ret)? {
             // SAFETY: the caller's contract.
             unsafe { $kernel::<$crate::simd::Avx8>($($arg),*) }
@@ -1023,13 +1034,13 @@ mod tests {
         assert_eq!(fused.to_array(), [exact; LANES]);
         #[cfg(target_arch = "x86_64")]
         if Isa::detect() == Isa::Avx {
-            #[target_feature(enable = "avx,fma")]
+            #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
             fn avx(a: f32, c: f32) -> [f32; LANES] {
                 Avx8::splat(a)
                     .mul_add(Avx8::splat(a), Avx8::splat(c))
                     .to_array()
             }
-            // SAFETY: AVX and FMA were detected.
+            // SAFETY: the features were detected.
             assert_eq!(unsafe { avx(a, c) }, [exact; LANES]);
         }
     }
