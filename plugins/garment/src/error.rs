@@ -20,11 +20,18 @@ pub enum GarmentError {
     },
     /// The RON text does not parse, or a value is refused while it is read (a range check
     /// names the field and the accepted range).
-    #[error("{file}:{line}:{col}: {message}")]
+    #[error(
+        "{file}:{line}:{col}: {}{message}",
+        .field.as_ref().map(|f| format!("in `{f}`: ")).unwrap_or_default()
+    )]
     Syntax {
         file: String,
         line: usize,
         col: usize,
+        /// The field whose value holds the error, as a path (`sizes[1].length_cm`); `None`
+        /// where the error is not inside a field's value (RON's message then names the field,
+        /// as for an unknown or a missing one).
+        field: Option<String>,
         message: String,
     },
     /// The file parses but its content is inconsistent or out of range.
@@ -65,14 +72,111 @@ pub(crate) fn read_text(path: &Path) -> Result<String, GarmentError> {
     })
 }
 
-/// Converts a RON error into [`GarmentError::Syntax`] (its span gives line and column).
-pub(crate) fn ron_error(file: &str, e: ron::error::SpannedError) -> GarmentError {
+/// Converts a RON error in `text` into [`GarmentError::Syntax`]: its span gives line and
+/// column, and the field whose value holds that position is named ([`field_at`]).
+pub(crate) fn ron_error(file: &str, text: &str, e: ron::error::SpannedError) -> GarmentError {
+    let (line, col) = (e.span.start.line, e.span.start.col);
     GarmentError::Syntax {
         file: file.to_owned(),
-        line: e.span.start.line,
-        col: e.span.start.col,
+        line,
+        col,
+        field: field_at(text, line, col),
         message: e.code.to_string(),
     }
+}
+
+/// The path of the field whose value holds position `line`:`col` (1-based, columns in
+/// characters) of a RON text: the enclosing fields' names joined by `.`, a list element's
+/// index in brackets (`sizes[1].length_cm`, a map's key as written: `body_cm."hip"`).
+/// `None` if the position is not inside any field's value (a field name itself, or between
+/// fields). A forward scan that skips strings and `//` comments; enough for error messages,
+/// not a parser.
+pub(crate) fn field_at(text: &str, line: usize, col: usize) -> Option<String> {
+    // Byte offset of the position (clamped to the line's end and the text's end).
+    let mut at = text.len();
+    let mut start = 0;
+    for (k, l) in text.split_inclusive('\n').enumerate() {
+        if k + 1 == line {
+            let within = l
+                .char_indices()
+                .nth(col.saturating_sub(1))
+                .map_or(l.trim_end_matches('\n').len(), |(i, _)| i);
+            at = start + within;
+            break;
+        }
+        start += l.len();
+    }
+    struct Level {
+        /// The field this container is the value of.
+        field: Option<String>,
+        /// For a list: the elements before the current one.
+        list: Option<usize>,
+    }
+    let mut levels: Vec<Level> = Vec::new();
+    let (mut key, mut field): (Option<String>, Option<String>) = (None, None);
+    let bytes = text.as_bytes();
+    let mut i = 0;
+    while i < at {
+        match bytes[i] {
+            b'/' if bytes.get(i + 1) == Some(&b'/') => {
+                while i < at && bytes[i] != b'\n' {
+                    i += 1;
+                }
+                continue;
+            }
+            b'"' => {
+                let open = i;
+                i += 1;
+                while i < bytes.len() && bytes[i] != b'"' {
+                    i += if bytes[i] == b'\\' { 2 } else { 1 };
+                }
+                key = Some(text[open..(i + 1).min(text.len())].to_owned());
+            }
+            b'(' | b'{' | b'[' => {
+                levels.push(Level {
+                    field: field.take(),
+                    list: (bytes[i] == b'[').then_some(0),
+                });
+                key = None;
+            }
+            b')' | b'}' | b']' => {
+                // Back in the field whose value the container was, until the next comma.
+                field = levels.pop().and_then(|l| l.field);
+                key = None;
+            }
+            b':' => field = key.take(),
+            b',' => {
+                (key, field) = (None, None);
+                if let Some(Level { list: Some(n), .. }) = levels.last_mut() {
+                    *n += 1;
+                }
+            }
+            c if c.is_ascii_alphanumeric() || c == b'_' => {
+                let from = i;
+                while i + 1 < at && (bytes[i + 1].is_ascii_alphanumeric() || bytes[i + 1] == b'_') {
+                    i += 1;
+                }
+                key = Some(text[from..=i].to_owned());
+            }
+            _ => {}
+        }
+        i += 1;
+    }
+    let mut parts: Vec<String> = Vec::new();
+    for level in &levels {
+        if let Some(f) = &level.field {
+            parts.push(f.clone());
+        }
+        if let (Some(n), Some(last)) = (level.list, parts.last_mut()) {
+            last.push_str(&format!("[{n}]"));
+        }
+    }
+    match field {
+        Some(f) => parts.push(f),
+        // Not in a field's value at the innermost level.
+        None => return None,
+    }
+    Some(parts.join("."))
 }
 
 /// The RON options the garment and fabric files are read with: `Some(..)` may be left out.
@@ -156,6 +260,33 @@ fn find_token(hay: &str, needle: &str) -> Option<usize> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn field_at_names_the_field_whose_value_holds_a_position() {
+        let text = "Garment(\n  name: \"a, b\", // x: (\n  sizes: [\n    (label: \"S\", n: {\"hip\": 9}),\n    (label: \"M\", length_cm: oops),\n  ],\n  fabric: 12,\n)";
+        let at = |needle: &str| {
+            let (line, l) = text
+                .lines()
+                .enumerate()
+                .find(|(_, l)| l.contains(needle))
+                .expect("needle");
+            field_at(
+                text,
+                line + 1,
+                l[..l.find(needle).expect("needle")].chars().count() + 1,
+            )
+        };
+        assert_eq!(at("12").as_deref(), Some("fabric"));
+        assert_eq!(at("oops").as_deref(), Some("sizes[1].length_cm"));
+        assert_eq!(at("9}").as_deref(), Some("sizes[0].n.\"hip\""));
+        assert_eq!(at("\"a, b\"").as_deref(), Some("name"));
+        // A field's name, and a position between fields: no field.
+        assert_eq!(at("fabric"), None);
+        assert_eq!(at("(label: \"M\""), None);
+        // Past the end of a line: its end, here after the comma that closes `fabric`.
+        assert_eq!(field_at(text, 7, 80), None);
+        assert_eq!(field_at(text, 7, 12).as_deref(), Some("fabric"));
+    }
 
     #[test]
     fn line_of_follows_the_path_and_skips_comments() {

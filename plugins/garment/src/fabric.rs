@@ -136,7 +136,7 @@ impl FabricSpec {
     pub fn from_ron_str(text: &str, file: &str) -> Result<FabricSpec, GarmentError> {
         let raw: FabricFile = ron_options()
             .from_str(text)
-            .map_err(|e| ron_error(file, e))?;
+            .map_err(|e| ron_error(file, text, e))?;
         if raw.name.trim().is_empty() {
             return Err(GarmentError::Invalid {
                 file: file.to_owned(),

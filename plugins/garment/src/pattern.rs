@@ -348,7 +348,7 @@ impl Pattern {
     pub fn from_ron_str(text: &str, file: &str, dir: &Path) -> Result<Pattern, GarmentError> {
         let raw: GarmentFile = ron_options()
             .from_str(text)
-            .map_err(|e| ron_error(file, e))?;
+            .map_err(|e| ron_error(file, text, e))?;
         let problems = Problems { text, file };
 
         if !(0.5..=20.0).contains(&raw.target_edge_cm) {

@@ -59,6 +59,13 @@ fn errors_name_file_line_and_field() {
         (good.replace("target_edge_cm: 2.5", "target_edge_cm: 0.01"), "target_edge_cm", "target_edge_cm|accepted 0.5..=20"),
         (good.replace("fabric: \"denim\"", "fabric: \"velvet\""), "fabric:", "fabric|velvet"),
         (good.replace("ease_cm: 1.0", "ease_cm: -3"), "ease_cm", "ease_cm|accepted 0..=30"),
+        // Values of the wrong type: RON's message, and the field whose value it is.
+        (good.replace("fabric: \"denim\"", "fabric: 12"), "fabric: 12", "in `fabric`: |string"),
+        (
+            good.replace("length_cm: 60", "length_cm: \"60\""),
+            "length_cm: \"60\"",
+            "in `sizes[1].length_cm`: ",
+        ),
         (
             good.replace("\"hand_r\"]", "\"hand_rr\"]"),
             "\"hand_rr\"",

@@ -109,6 +109,11 @@ fn syntax_unknown_and_missing_fields_are_located() {
         msg.starts_with("fabrics/bad.ron:9:") && msg.contains("frcition"),
         "unknown field: {msg}"
     );
+    let msg = error_of(&GOOD.replace("friction: 0.4,", "friction: \"high\","));
+    assert!(
+        msg.starts_with("fabrics/bad.ron:8:") && msg.contains("in `friction`: "),
+        "a value of the wrong type: {msg}"
+    );
     let msg = error_of(&GOOD.replace("    lift_coefficient: 0.3,\n", ""));
     assert!(msg.contains("lift_coefficient"), "missing field: {msg}");
     let msg = error_of(&GOOD.replace("\"test cloth\"", "\"\""));
