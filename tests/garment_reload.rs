@@ -92,6 +92,12 @@ fn a_malformed_edit_is_reported_and_the_garment_kept() {
     }
     let before = status(&app);
     assert!(before.error.is_none(), "{:?}", before.error);
+    // Loaded on one frame's pose and stepped on a later one's, far away: carried along, not
+    // blown up.
+    assert_eq!(
+        before.resets, 0,
+        "blow-up resets while putting the skirt on"
+    );
     let worn = worn_entities(&mut app);
     assert_eq!(worn.len(), 1);
 
@@ -155,6 +161,7 @@ fn a_malformed_edit_is_reported_and_the_garment_kept() {
     }
     let fixed = status(&app);
     assert!(fixed.error.is_none(), "{:?}", fixed.error);
+    assert_eq!(fixed.resets, 0, "blow-up resets after the reload");
     assert_eq!(fixed.worn, before.worn);
     let again = worn_entities(&mut app);
     assert_eq!(again.len(), 1);

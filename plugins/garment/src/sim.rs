@@ -134,7 +134,7 @@ pub struct GarmentSim {
     floor_y: Option<f32>,
     resets: u32,
     measuring: bool,
-    /// Attachment targets of the last step, to notice a teleported body.
+    /// Attachment targets of the last step or reset, to notice a teleported body.
     last_targets: Option<Vec<Vec3>>,
     /// Per vertex: the share of [`RENDER_OFFSET_M`] it is drawn out along its normal.
     render_weight: Vec<f32>,
@@ -993,6 +993,7 @@ impl GarmentSim {
             }
             if healthy {
                 self.keep_skinning(skinning);
+                self.last_targets = Some(self.anchors(skinning));
                 return Ok(());
             }
         }
@@ -1008,9 +1009,13 @@ impl GarmentSim {
             .collect();
         self.keep_skinning(skinning);
         self.solver.reset_to(&skinned)?;
-        let (posed, _) = self.posed_colliders(skinning, &self.anchors(skinning));
+        let anchors = self.anchors(skinning);
+        let (posed, _) = self.posed_colliders(skinning, &anchors);
         self.set_solver_colliders(&posed)?;
         self.solver.teleport_colliders();
+        // The next step's teleport check starts from here: a body that has moved far since
+        // (an app that loaded the garment on the last frame's pose) carries it along.
+        self.last_targets = Some(anchors);
         Ok(())
     }
 
