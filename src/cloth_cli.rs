@@ -189,7 +189,7 @@ pub fn sim(
     threads: Option<usize>,
 ) -> Result<(SimReport, GarmentSim, Vec<Affine3A>)> {
     let (shaped, mesh) = load_garment(model, shape, garment, size)?;
-    sim_mesh(model, &shaped, &mesh, motion, frames, threads)
+    sim_mesh(model, &shaped, &mesh, motion, frames, threads, false)
 }
 
 /// The body walking a motion as the cloth sees it: the motion pipeline's 30 Hz poses,
@@ -205,6 +205,8 @@ pub struct Walk<'a> {
     stream: Vec<fitroom_sensor::SensorFrame>,
     next: usize,
     last: (Vec<Quat>, Vec<Vec3>),
+    /// Play the clip back and forth instead of jumping from its end to its start.
+    ping_pong: bool,
 }
 
 impl<'a> Walk<'a> {
@@ -229,7 +231,15 @@ impl<'a> Walk<'a> {
             stream,
             next: 1,
             last,
+            ping_pong: false,
         })
+    }
+
+    /// The same walk played forwards, then backwards, and so on: no jump back to the start
+    /// (which the garment crosses as a teleport).
+    pub fn ping_pong(mut self) -> Self {
+        self.ping_pong = true;
+        self
     }
 
     /// The clip's frames (30 Hz); [`Self::next_frame`] wraps past the last to the first.
@@ -239,7 +249,15 @@ impl<'a> Walk<'a> {
 
     /// The skinning of each 120 Hz step of the next frame.
     pub fn next_frame(&mut self) -> Vec<Vec<Affine3A>> {
-        let frame = &self.stream[self.next % self.stream.len()];
+        let len = self.stream.len();
+        let index = if self.ping_pong && len > 1 {
+            let period = 2 * (len - 1);
+            let k = self.next % period;
+            if k < len { k } else { period - k }
+        } else {
+            self.next % len
+        };
+        let frame = &self.stream[index];
         self.next += 1;
         let pose = self.pipeline.pose(frame, WALK_FRAME_S);
         let now = (pose.rotations.clone(), pose.heads.clone());
@@ -289,8 +307,12 @@ fn sim_mesh(
     motion: &Path,
     frames: usize,
     threads: Option<usize>,
+    ping_pong: bool,
 ) -> Result<(SimReport, GarmentSim, Vec<Affine3A>)> {
     let mut walk = Walk::new(model, shaped, motion)?;
+    if ping_pong {
+        walk = walk.ping_pong();
+    }
     let mut settings = SolverSettings::default();
     if let Some(t) = threads {
         settings.threads = t.max(1);
@@ -520,13 +542,13 @@ fn dress_on_default_body(
 /// `fitroom cloth bench`.
 pub fn bench(model: &BodyModel, dress: &Path, motion: &Path, frames: usize) -> Result<BenchReport> {
     let (shaped, body, mesh) = dress_on_default_body(model, dress)?;
-    let (report, _, _) = sim_mesh(model, &shaped, &mesh, motion, frames, None)?;
+    let (report, _, _) = sim_mesh(model, &shaped, &mesh, motion, frames, None, true)?;
     let pattern = dress
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("ron"));
     let (dress_4k, edge_cm) = if pattern {
         let (fine, edge_cm) = remesh(&body, dress, report.particles, DRESS_PARTICLES)?;
-        let (fine, _, _) = sim_mesh(model, &shaped, &fine, motion, frames, None)?;
+        let (fine, _, _) = sim_mesh(model, &shaped, &fine, motion, frames, None, true)?;
         (Some(fine), Some(edge_cm))
     } else {
         (None, None)
