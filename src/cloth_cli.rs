@@ -242,7 +242,8 @@ impl<'a> Walk<'a> {
         self
     }
 
-    /// The clip's frames (30 Hz); [`Self::next_frame`] wraps past the last to the first.
+    /// The clip's frames (30 Hz); past the last, [`Self::next_frame`] wraps to the first, or
+    /// turns back ([`Self::ping_pong`]).
     pub fn frames(&self) -> usize {
         self.stream.len()
     }

@@ -5,6 +5,9 @@
 
 use fitroom::cloth_cli::{DRESS_PARTICLES, bench};
 
+/// Motion frames walked: past the embedded clip's end (119 frames).
+const FRAMES: usize = 130;
+
 #[test]
 fn the_bench_measures_the_dress_at_the_goals_particle_count() {
     let assets = fitroom::assets::assets_dir().expect("assets");
@@ -14,7 +17,7 @@ fn the_bench_measures_the_dress_at_the_goals_particle_count() {
         &model,
         &assets.join("garments/sundress.ron"),
         &assets.join(fitroom::assets::DEFAULT_MOTION),
-        20,
+        FRAMES,
     )
     .expect("the bench runs");
     let dress = &report.dress;
@@ -43,9 +46,11 @@ fn the_bench_measures_the_dress_at_the_goals_particle_count() {
         assert!(r.max_tether_ratio <= 1.10, "{}", r.max_tether_ratio);
         assert_eq!(
             r.steps,
-            19 * 4,
+            (FRAMES - 1) * 4,
             "four 120 Hz steps per 30 Hz frame after the first"
         );
+        // Past the clip's end the walk turns back instead of jumping to its start.
+        assert_eq!(r.teleports, 0);
         assert!(r.step_ms.p50 > 0.0 && r.step_ms.p50.is_finite());
     }
     let counts: Vec<usize> = report.scaling.iter().map(|(n, _)| *n).collect();
