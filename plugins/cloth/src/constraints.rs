@@ -1039,10 +1039,11 @@ pub(crate) unsafe fn solve_bend(
         targets,
     };
     #[cfg(target_arch = "x86_64")]
-    #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-    unsafe fn avx<const MODE: u8, const PAIRS: u8>(args: BendArgs<'_, '_>) {
-        // SAFETY: the caller's contract.
-        unsafe { bend_kernel::<Avx8, MODE, PAIRS>(args) }
+    crate::simd::avx_features! {
+        unsafe fn avx<const MODE: u8, const PAIRS: u8>(args: BendArgs<'_, '_>) {
+            // SAFETY: the caller's contract.
+            unsafe { bend_kernel::<Avx8, MODE, PAIRS>(args) }
+        }
     }
     macro_rules! dispatch {
         ($($mode:literal, $pairs:literal);*) => {

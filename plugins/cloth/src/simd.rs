@@ -964,8 +964,7 @@ pub(crate) enum Isa {
     Baseline,
     /// One AVX register per eight lanes, on an x86-64-v3 processor (AVX, AVX2, FMA, BMI1,
     /// BMI2, LZCNT, POPCNT): the kernels and the step's work items around them
-    /// (`crate::solver`) are compiled for that level; it is the string every
-    /// `#[target_feature(enable = …)]` of this crate gives.
+    /// (`crate::solver`) are compiled for that level (`avx_features!`).
     Avx,
 }
 
@@ -987,6 +986,17 @@ impl Isa {
     }
 }
 
+/// Gives the function item inside it the target features of [`Isa::Avx`], the ones
+/// `Isa::detect` checks: every AVX function of this crate takes them from here, so that none
+/// enables a feature the detection did not check.
+macro_rules! avx_features {
+    ($item:item) => {
+        #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
+        $item
+    };
+}
+pub(crate) use avx_features;
+
 /// Calls the generic kernel `$kernel::<L>(args)` with the lanes `isa` names: the AVX one
 /// through a wrapper compiled with AVX enabled (the kernel is `#[inline(always)]`, so it is
 /// compiled with AVX inside it), the baseline one directly. The arguments are given with their
@@ -995,10 +1005,11 @@ impl Isa {
 macro_rules! dispatch_lanes {
     ($isa:expr, $kernel:ident($($arg:ident: $ty:ty),* $(,)?) $(-> $ret:ty)?) => {{
         #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-        unsafe fn avx($($arg: $ty),*) $(-> $ret)? {
-            // SAFETY: the caller's contract.
-            unsafe { $kernel::<$crate::simd::Avx8>($($arg),*) }
+        $crate::simd::avx_features! {
+            unsafe fn avx($($arg: $ty),*) $(-> $ret)? {
+                // SAFETY: the caller's contract.
+                unsafe { $kernel::<$crate::simd::Avx8>($($arg),*) }
+            }
         }
         // SAFETY: the caller's contract; AVX only where detected.
         unsafe {
@@ -1034,11 +1045,12 @@ mod tests {
         assert_eq!(fused.to_array(), [exact; LANES]);
         #[cfg(target_arch = "x86_64")]
         if Isa::detect() == Isa::Avx {
-            #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-            fn avx(a: f32, c: f32) -> [f32; LANES] {
-                Avx8::splat(a)
-                    .mul_add(Avx8::splat(a), Avx8::splat(c))
-                    .to_array()
+            avx_features! {
+                fn avx(a: f32, c: f32) -> [f32; LANES] {
+                    Avx8::splat(a)
+                        .mul_add(Avx8::splat(a), Avx8::splat(c))
+                        .to_array()
+                }
             }
             // SAFETY: the features were detected.
             assert_eq!(unsafe { avx(a, c) }, [exact; LANES]);

@@ -1796,9 +1796,10 @@ impl StepContext<'_> {
     /// they are compiled into each version; every result is the same to the bit.
     fn exec(&self, phase: usize, item: u32) {
         #[cfg(target_arch = "x86_64")]
-        #[target_feature(enable = "avx,avx2,fma,bmi1,bmi2,lzcnt,popcnt")]
-        unsafe fn avx(context: &StepContext<'_>, phase: usize, item: u32) {
-            context.exec_with(phase, item)
+        crate::simd::avx_features! {
+            unsafe fn avx(context: &StepContext<'_>, phase: usize, item: u32) {
+                context.exec_with(phase, item)
+            }
         }
         #[cfg(target_arch = "x86_64")]
         if self.k.isa == Isa::Avx {
