@@ -52,6 +52,8 @@
 //! Metres, seconds, kilograms, newtons. Positions are in the simulation frame: world space,
 //! or the body frame's local space once [`ClothSolver::set_body_frame`] has been called.
 
+#![deny(clippy::undocumented_unsafe_blocks)]
+
 pub mod collision;
 pub mod constraints;
 pub mod error;

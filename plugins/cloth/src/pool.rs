@@ -541,6 +541,8 @@ pub(crate) struct SharedSlice<'a, T> {
 
 // SAFETY: see the type's documentation: concurrent accesses touch disjoint elements.
 unsafe impl<T: Send> Send for SharedSlice<'_, T> {}
+// SAFETY: as for `Send`: concurrent accesses, reads included, touch disjoint elements or are
+// ordered by the phase counters (see the type's documentation).
 unsafe impl<T: Send> Sync for SharedSlice<'_, T> {}
 
 impl<'a, T: Copy> SharedSlice<'a, T> {
@@ -568,6 +570,8 @@ impl<'a, T: Copy> SharedSlice<'a, T> {
     #[inline(always)]
     pub unsafe fn get(&self, i: usize) -> T {
         debug_assert!(i < self.len);
+        // SAFETY: the caller guarantees `i < len` (so the pointer is in the borrowed slice) and
+        // that no other thread writes element `i` during this phase.
         unsafe { *self.ptr.add(i) }
     }
 
@@ -576,6 +580,8 @@ impl<'a, T: Copy> SharedSlice<'a, T> {
     #[inline(always)]
     pub unsafe fn set(&self, i: usize, value: T) {
         debug_assert!(i < self.len);
+        // SAFETY: the caller guarantees `i < len` (so the pointer is in the borrowed slice) and
+        // that no other thread reads or writes element `i` during this phase.
         unsafe { *self.ptr.add(i) = value }
     }
 }
@@ -605,6 +611,8 @@ mod tests {
             let exec = |p: usize, k: u32| {
                 // The order of completion must respect phases.
                 let stamp = counter.fetch_add(1, Ordering::SeqCst) + 1;
+                // SAFETY: each (phase, item) pair writes its own element `offsets[p] + k`, inside
+                // `log`.
                 unsafe { shared.set((offsets[p] + k) as usize, stamp + 1000 * p as u32) };
             };
             pool.run(&|thread| {
