@@ -35,7 +35,7 @@ pub fn assets_dir() -> Result<PathBuf> {
     }
     bail!(
         "no assets folder with {DEFAULT_BODY} found (looked in: {}); set FITROOM_ASSETS to the \
-         folder, or create the body with `fitroom import makehuman ../shared/data/makehuman`",
+         folder, or create the body with `fitroom import makehuman DIR` (DIR: the MakeHuman data, e.g. MakeHuman's MPFB2 asset folder)",
         candidates
             .iter()
             .map(|p| p.display().to_string())

@@ -370,11 +370,7 @@ pub fn ansur(
     threads: usize,
 ) -> Result<AnsurReport> {
     let mut subjects = Vec::new();
-    for (file, female) in [
-        ("ANSUR_II_FEMALE_Public.csv", true),
-        ("ANSUR_II_MALE_Public.csv", false),
-    ] {
-        let all = fitroom_body::ansur::read_ansur(&data.join(file), female)?;
+    for all in fitroom_body::ansur::read_survey(data)? {
         subjects.extend(match per_sex {
             Some(n) => fitroom_body::ansur::sample(&all, n, seed),
             None => all,

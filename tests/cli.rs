@@ -13,7 +13,7 @@ fn sensor_inspect_prints_json_for_every_clip() {
     for (file, frames) in common::cmu_index() {
         let out = fitroom()
             .args(["sensor", "inspect"])
-            .arg(common::cmu_dir().join(&file))
+            .arg(fitroom_testdata::clip_path(&file))
             .arg("--json")
             .output()
             .expect("fitroom runs");
@@ -45,7 +45,7 @@ fn sensor_inspect_prints_json_for_every_clip() {
 
 #[test]
 fn a_broken_clip_fails_with_file_and_line_and_no_panic() {
-    let text = std::fs::read_to_string(common::cmu_dir().join("07_01.bvh")).expect("clip");
+    let text = fitroom_testdata::clip_text("07_01.bvh");
     let broken = text.replacen("Frame Time:", "Frame Time: x", 1);
     let path = common::out_dir().join("broken_frame_time.bvh");
     std::fs::write(&path, broken).expect("write");

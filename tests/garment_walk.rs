@@ -1,5 +1,5 @@
 //! The robustness acceptance on the avatar: garments through 10,000 frames of the
-//! shared walking clips (their 120 Hz frames, one cloth step each, the clips looping, which
+//! committed walking clips (their 120 Hz frames, one cloth step each, the clips looping, which
 //! teleports the body back to its start): no NaN, no simulated particle more than 5 mm inside
 //! a body collider after a step, no tether past 110 %, no blow-up reset. The figures are
 //! printed per clip. The dress and the T-shirt walk all six clips (10,000 frames each), the
@@ -10,18 +10,10 @@ mod common;
 use std::path::PathBuf;
 
 fn walking_clips() -> Vec<(PathBuf, usize)> {
-    let dir = common::shared_dir().join("data/mocap/cmu");
-    let index = std::fs::read_to_string(dir.join("INDEX.tsv")).expect("INDEX.tsv");
-    index
-        .lines()
-        .skip(1)
-        .filter_map(|l| {
-            let f: Vec<&str> = l.split('\t').collect();
-            let desc = f.get(5)?;
-            let frames: usize = f.get(3)?.parse().ok()?;
-            (desc.starts_with("walk") || desc.starts_with("slow walk"))
-                .then(|| (dir.join(f[0]), frames))
-        })
+    fitroom_testdata::cmu_index()
+        .into_iter()
+        .filter(|c| c.description.starts_with("walk") || c.description.starts_with("slow walk"))
+        .map(|c| (c.path(), c.frames))
         .collect()
 }
 

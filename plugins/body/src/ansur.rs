@@ -73,14 +73,43 @@ pub enum AnsurError {
     },
 }
 
-/// Reads an ANSUR II public CSV file (latin-1; the id column is `SubjectId` in the female
-/// file and `subjectid` in the male one).
+/// The survey's two public files and whether each holds women.
+pub const ANSUR_FILES: [(&str, bool); 2] = [
+    ("ANSUR_II_FEMALE_Public.csv", true),
+    ("ANSUR_II_MALE_Public.csv", false),
+];
+
+/// Reads both ANSUR II files from `dir`, each plain (`.csv`) or gzip-compressed (`.csv.gz`):
+/// the women, then the men.
+pub fn read_survey(dir: &Path) -> Result<[Vec<AnsurSubject>; 2], AnsurError> {
+    let read = |(name, female): (&str, bool)| {
+        let plain = dir.join(name);
+        let compressed = dir.join(format!("{name}.gz"));
+        let path = if plain.is_file() || !compressed.is_file() {
+            plain
+        } else {
+            compressed
+        };
+        read_ansur(&path, female)
+    };
+    Ok([read(ANSUR_FILES[0])?, read(ANSUR_FILES[1])?])
+}
+
+/// Reads an ANSUR II public CSV file, plain or gzip-compressed (latin-1; the id column is
+/// `SubjectId` in the female file and `subjectid` in the male one).
 pub fn read_ansur(path: &Path, female: bool) -> Result<Vec<AnsurSubject>, AnsurError> {
     let p = path.display().to_string();
-    let bytes = std::fs::read(path).map_err(|source| AnsurError::Io {
+    let io = |source| AnsurError::Io {
         path: p.clone(),
         source,
-    })?;
+    };
+    let mut bytes = std::fs::read(path).map_err(io)?;
+    if bytes.starts_with(&[0x1f, 0x8b]) {
+        let mut text = Vec::with_capacity(bytes.len() * 5);
+        std::io::Read::read_to_end(&mut flate2::read::GzDecoder::new(bytes.as_slice()), &mut text)
+            .map_err(io)?;
+        bytes = text;
+    }
     // Latin-1 to UTF-8: every byte is its own code point.
     let text: String = bytes.iter().map(|&b| b as char).collect();
     let mut reader = csv::Reader::from_reader(text.as_bytes());

@@ -5,20 +5,12 @@
 mod common;
 
 use std::collections::BTreeMap;
-use std::path::PathBuf;
 
 use fitroom_body::ansur::{self, ANSUR_MEASURES};
 use fitroom_body::{BodyModel, FitError, FitOptions, FitRequest, Measure, Shape, fit};
 
 fn model() -> &'static BodyModel {
     common::asset_model()
-}
-
-fn ansur_dir() -> PathBuf {
-    std::env::var_os("FITROOM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared")))
-        .join("data/ansur2")
 }
 
 /// The nine ANSUR measures of a body the model itself makes: fitting them must find a body
@@ -151,16 +143,11 @@ fn bad_requests_are_clear_errors() {
 /// is evaluated by `fitroom body ansur` (docs/STATUS.md).
 #[test]
 fn ansur_ii_subjects_are_fitted_within_half_a_centimetre() {
-    let dir = ansur_dir();
+    let survey = ansur::read_survey(&fitroom_testdata::ansur_dir()).unwrap_or_else(|e| panic!("{e}"));
     let mut subjects = Vec::new();
-    for (file, female) in [
-        ("ANSUR_II_FEMALE_Public.csv", true),
-        ("ANSUR_II_MALE_Public.csv", false),
-    ] {
-        let all = ansur::read_ansur(&dir.join(file), female)
-            .unwrap_or_else(|e| panic!("{}: {e}", dir.display()));
-        assert!(all.len() > 1900, "{file}: {} subjects", all.len());
-        subjects.extend(ansur::sample(&all, 200, 1));
+    for all in &survey {
+        assert!(all.len() > 1900, "{} subjects", all.len());
+        subjects.extend(ansur::sample(all, 200, 1));
     }
     let report = ansur::evaluate(model(), &subjects, &FitOptions::default(), 2, &|_, _| {});
     println!(

@@ -13,10 +13,7 @@ use fitroom_motion::filter::{FilterKind, FrameGate, HoltParams, KalmanParams, On
 use fitroom_sensor::{SensorFrame, bvh_source::BvhSource};
 
 fn clip_frames() -> Vec<SensorFrame> {
-    let shared = std::env::var_os("FITROOM_SHARED")
-        .map(std::path::PathBuf::from)
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared").into());
-    let path = shared.join("data/mocap/cmu/07_01.bvh");
+    let path = fitroom_testdata::clip_path("07_01.bvh");
     let source = match BvhSource::load(&path, Default::default()) {
         Ok(s) => s,
         Err(e) => panic!("bench clip {}: {e}", path.display()),

@@ -12,14 +12,9 @@ use fitroom_motion::{
 };
 
 fn clips() -> Vec<PathBuf> {
-    let dir = common::shared_dir().join("data/mocap/cmu");
-    let index = std::fs::read_to_string(dir.join("INDEX.tsv")).expect("INDEX.tsv");
-    index
-        .lines()
-        .skip(1)
-        .filter_map(|l| l.split('\t').next())
-        .filter(|f| f.ends_with(".bvh"))
-        .map(|f| dir.join(f))
+    fitroom_testdata::cmu_index()
+        .iter()
+        .map(|c| c.path())
         .collect()
 }
 

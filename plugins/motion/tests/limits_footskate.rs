@@ -35,7 +35,7 @@ const DT: f32 = 1.0 / 30.0;
 
 /// One loop of a clip as 30 Hz sensor frames.
 fn frames(file: &str) -> Vec<SensorFrame> {
-    let clip = BvhClip::load(common::cmu_dir().join(file)).expect("clip parses");
+    let clip = BvhClip::load(fitroom_testdata::clip_path(file)).expect("clip parses");
     let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
     let duration = source.clip_duration_s();
     let mut out = Vec::new();

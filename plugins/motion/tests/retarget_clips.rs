@@ -50,7 +50,7 @@ fn limb_bones_follow_the_source_limbs_on_every_clip() {
         "clip", "frames", "mean max°"
     );
     for file in index {
-        let clip = BvhClip::load(common::cmu_dir().join(&file)).expect("clip parses");
+        let clip = BvhClip::load(fitroom_testdata::clip_path(&file)).expect("clip parses");
         let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
         let mut retargeter =
             Retargeter::new(skeleton.clone(), RetargetOptions::default()).expect("retargeter");
@@ -117,7 +117,7 @@ fn low_confidence_joints_keep_their_last_good_orientation() {
     let rest = model.rest_pose(&model.positions);
     let skeleton = fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton");
     let mut retargeter = Retargeter::new(skeleton, RetargetOptions::default()).expect("retargeter");
-    let clip = BvhClip::load(common::cmu_dir().join("141_16.bvh")).expect("clip");
+    let clip = BvhClip::load(fitroom_testdata::clip_path("141_16.bvh")).expect("clip");
     let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
     let frames = source.advance(2.0).expect("frames");
     let elbow = retargeter.skeleton().index_of("upperarm_r").expect("bone");

@@ -242,7 +242,8 @@ impl BvhSource {
             })
             .collect();
 
-        let stem = Path::new(clip.file_name())
+        let file_name = clip.file_name();
+        let stem = Path::new(file_name.strip_suffix(".gz").unwrap_or(file_name))
             .file_stem()
             .map(|s| s.to_string_lossy().into_owned())
             .unwrap_or_else(|| clip.file_name().to_string());

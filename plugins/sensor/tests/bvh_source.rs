@@ -25,7 +25,7 @@ fn all_sources() -> Vec<(String, BvhSource)> {
 }
 
 fn load(file: &str) -> BvhSource {
-    BvhSource::load(common::cmu_dir().join(file), BvhSourceOptions::default())
+    BvhSource::load(common::clip_path(file), BvhSourceOptions::default())
         .unwrap_or_else(|e| panic!("{file}: {e}"))
 }
 
@@ -364,7 +364,7 @@ fn placement_options_move_the_performer() {
         start_distance_m: 3.0,
         ..BvhSourceOptions::default()
     };
-    let source = BvhSource::load(common::cmu_dir().join("02_01.bvh"), options).expect("loads");
+    let source = BvhSource::load(common::clip_path("02_01.bvh"), options).expect("loads");
     let reference = load("02_01.bvh");
     for t in [0.0, 0.5, 1.7] {
         for joint in KinectJoint::ALL {

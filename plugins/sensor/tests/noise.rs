@@ -19,7 +19,7 @@ fn load_at(file: &str, start_distance_m: f32) -> BvhSource {
         start_distance_m,
         ..BvhSourceOptions::default()
     };
-    BvhSource::load(common::cmu_dir().join(file), options).unwrap_or_else(|e| panic!("{file}: {e}"))
+    BvhSource::load(common::clip_path(file), options).unwrap_or_else(|e| panic!("{file}: {e}"))
 }
 
 /// `n` consecutive 30 Hz frames of the looping clip (`frame_at(k / 30)`).

@@ -1,5 +1,5 @@
-//! Shared helpers of the integration tests: where the MakeHuman data is, and the imported
-//! model (imported once per test binary).
+//! Shared helpers of the integration tests: the shipped body asset, and the raw MakeHuman data
+//! with the model imported from it when `FITROOM_MAKEHUMAN` names that data.
 
 #![allow(dead_code)]
 
@@ -9,13 +9,18 @@ use std::time::{Duration, Instant};
 
 use fitroom_body::{BodyModel, ImportReport, import_makehuman_with_report};
 
-/// The MakeHuman data: `$FITROOM_SHARED/data/makehuman`, by default `../shared` next to the
-/// project checkout.
-pub fn makehuman_dir() -> PathBuf {
-    let shared = std::env::var_os("FITROOM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared")));
-    shared.join("data/makehuman")
+/// The raw MakeHuman data when `FITROOM_MAKEHUMAN` names it (it is not committed: the
+/// product ships the converted body, `assets/bodies/makehuman.fitbody`, and most tests run on
+/// that); `None` prints why the calling test skips its re-import checks.
+pub fn makehuman_dir() -> Option<PathBuf> {
+    let dir = fitroom_testdata::makehuman_dir();
+    if dir.is_none() {
+        println!(
+            "skipped: set FITROOM_MAKEHUMAN to the MakeHuman data folder to check the importer \
+             against the raw files"
+        );
+    }
+    dir
 }
 
 pub struct Imported {
@@ -24,24 +29,29 @@ pub struct Imported {
     pub import_time: Duration,
 }
 
-/// The body imported from the shared data (once per test binary).
-pub fn imported() -> &'static Imported {
-    static MODEL: OnceLock<Imported> = OnceLock::new();
-    MODEL.get_or_init(|| {
-        let dir = makehuman_dir();
-        let start = Instant::now();
-        let (model, report) = import_makehuman_with_report(&dir, &mut |_, _, _| {})
-            .unwrap_or_else(|e| panic!("importing {} failed: {e}", dir.display()));
-        Imported {
-            model,
-            report,
-            import_time: start.elapsed(),
-        }
-    })
+/// The body imported from the raw MakeHuman data (once per test binary), when
+/// [`makehuman_dir`] has it.
+pub fn imported() -> Option<&'static Imported> {
+    static MODEL: OnceLock<Option<Imported>> = OnceLock::new();
+    MODEL
+        .get_or_init(|| {
+            let dir = makehuman_dir()?;
+            let start = Instant::now();
+            let (model, report) = import_makehuman_with_report(&dir, &mut |_, _, _| {})
+                .unwrap_or_else(|e| panic!("importing {} failed: {e}", dir.display()));
+            Some(Imported {
+                model,
+                report,
+                import_time: start.elapsed(),
+            })
+        })
+        .as_ref()
 }
 
+/// The body the tests run on: the shipped asset (the importer's output, checked against a
+/// fresh import by `makehuman.rs` when the raw data is there).
 pub fn model() -> &'static BodyModel {
-    &imported().model
+    asset_model()
 }
 
 /// The shipped body asset (`assets/bodies/makehuman.fitbody`), read once per test binary.

@@ -1,38 +1,24 @@
-//! Helpers shared by the motion crate's tests: the shared data, the body asset, a seeded RNG.
+//! Helpers shared by the motion crate's tests: the committed clips, the body asset, a seeded RNG.
 #![allow(dead_code)]
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 
 use fitroom_body::BodyModel;
 use fitroom_motion::AvatarSkeleton;
 use fitroom_sensor::{SensorFrame, bvh_source::BvhSource};
 use glam::Vec3;
 
-/// The shared data folder (`../shared` beside the checkout, or `FITROOM_SHARED`).
-pub fn shared_dir() -> PathBuf {
-    std::env::var_os("FITROOM_SHARED")
-        .map(PathBuf::from)
-        .unwrap_or_else(|| concat!(env!("CARGO_MANIFEST_DIR"), "/../../../shared").into())
-}
-
-pub fn cmu_dir() -> PathBuf {
-    shared_dir().join("data/mocap/cmu")
-}
-
-/// The clip file names listed in `INDEX.tsv`.
+/// The clip names listed in the committed `INDEX.tsv` (`data/mocap/cmu`).
 pub fn cmu_index() -> Vec<String> {
-    let text = std::fs::read_to_string(cmu_dir().join("INDEX.tsv")).expect("INDEX.tsv");
-    text.lines()
-        .skip(1)
-        .filter_map(|l| l.split('\t').next())
-        .filter(|f| f.ends_with(".bvh"))
-        .map(String::from)
+    fitroom_testdata::cmu_index()
+        .into_iter()
+        .map(|c| c.file)
         .collect()
 }
 
 /// The clean 30 Hz stream of one loop of a clip.
 pub fn clean_frames(file: &str) -> Vec<SensorFrame> {
-    let source = BvhSource::load(cmu_dir().join(file), Default::default()).expect(file);
+    let source = BvhSource::load(fitroom_testdata::clip_path(file), Default::default()).expect(file);
     let n = (source.clip_duration_s() * 30.0).floor() as usize;
     (0..=n).map(|k| source.frame_at(k as f64 / 30.0)).collect()
 }

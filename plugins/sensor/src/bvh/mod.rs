@@ -157,11 +157,12 @@ impl BvhPose {
 }
 
 impl BvhClip {
-    /// Reads and parses a BVH file. Errors name the path as given.
+    /// Reads and parses a BVH file, plain or gzip-compressed (`walk.bvh.gz`). Errors name the
+    /// path as given.
     pub fn load(path: impl AsRef<Path>) -> Result<BvhClip, BvhError> {
         let path = path.as_ref();
         let file = path.display().to_string();
-        let bytes = std::fs::read(path).map_err(|source| BvhError::Io {
+        let bytes = read_maybe_gzip(path).map_err(|source| BvhError::Io {
             file: file.clone(),
             source,
         })?;
@@ -292,3 +293,16 @@ impl BvhClip {
         self.pose_from_values(&[])
     }
 }
+/// The bytes of a file, decompressed when it is gzip-compressed (it starts with gzip's magic
+/// bytes, whatever its name).
+fn read_maybe_gzip(path: &Path) -> std::io::Result<Vec<u8>> {
+    use std::io::Read;
+    let bytes = std::fs::read(path)?;
+    if !bytes.starts_with(&[0x1f, 0x8b]) {
+        return Ok(bytes);
+    }
+    let mut text = Vec::with_capacity(bytes.len() * 4);
+    flate2::read::GzDecoder::new(bytes.as_slice()).read_to_end(&mut text)?;
+    Ok(text)
+}
+
