@@ -75,7 +75,12 @@ pub fn headless_app(options: &AppOptions) -> Result<App> {
     }
     let mut app = build_app(options)?;
     app.init_resource::<RootPath>()
-        .add_systems(PostUpdate, track_root_path);
+        .add_systems(
+            PostUpdate,
+            track_root_path
+                .in_set(fitroom_schedule::FitroomSystems::Ui)
+                .after(kiosk::KioskSystems::Flow),
+        );
     app.finish();
     app.cleanup();
     Ok(app)
@@ -161,7 +166,7 @@ pub fn run(options: &AppOptions, frames: u32, screenshot: Option<&Path>) -> Resu
         retarget_scale: motion
             .and_then(|m| m.pipeline.retargeter().calibration())
             .map(|c| c.scale),
-        rejected_frames: motion.map_or(0, |m| m.gate.stats().rejected_total()),
+        rejected_frames: motion.map_or(0, |m| m.pipeline.gate.stats().rejected_total()),
         joints: BTreeMap::new(),
         screenshot,
     };

@@ -1,50 +1,66 @@
-//! CPU time per pipeline stage, measured by marker systems placed around each stage's
-//! system set. The stages run one after another (their sets are chained), so the time between a
-//! stage's start and end markers is that stage's cost in this frame.
+//! CPU time per stage of the frame, measured by marker systems placed around each
+//! [`FitroomSystems`] stage (and Bevy's transform propagation). The stages run one after
+//! another (they are chained), so the time between a stage's start and end markers is that
+//! stage's cost in this frame.
 
+use std::sync::Mutex;
 use std::time::Instant;
 
 use bevy::{prelude::*, transform::TransformSystems};
-use fitroom_motion::plugin::MotionSystems;
-use fitroom_sensor::plugin::SensorSystems;
+use fitroom_schedule::FitroomSystems;
 use serde::Serialize;
 
-/// The pipeline stages we time.
+/// What we time: a stage of the frame, the transform propagation between `Pose` and
+/// `Measure`, or the whole frame.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub enum Stage {
-    Sensor,
-    Motion,
-    Pose,
+    Systems(FitroomSystems),
     TransformPropagate,
     /// A whole `App::update`, from `First` to `Last`.
     Frame,
 }
 
+/// Every stage timed, in the order they run.
+const STAGES: [Stage; 10] = [
+    Stage::Systems(FitroomSystems::Sensor),
+    Stage::Systems(FitroomSystems::Track),
+    Stage::Systems(FitroomSystems::Motion),
+    Stage::Systems(FitroomSystems::Pose),
+    Stage::TransformPropagate,
+    Stage::Systems(FitroomSystems::Measure),
+    Stage::Systems(FitroomSystems::Cloth),
+    Stage::Systems(FitroomSystems::Gesture),
+    Stage::Systems(FitroomSystems::Ui),
+    Stage::Frame,
+];
+
 impl Stage {
-    pub const ALL: [Stage; 5] = [
-        Stage::Sensor,
-        Stage::Motion,
-        Stage::Pose,
-        Stage::TransformPropagate,
-        Stage::Frame,
-    ];
+    pub const ALL: [Stage; 10] = STAGES;
 
     pub fn name(self) -> &'static str {
         match self {
-            Stage::Sensor => "sensor",
-            Stage::Motion => "motion",
-            Stage::Pose => "pose",
+            Stage::Systems(s) => s.name(),
             Stage::TransformPropagate => "transform_propagate",
             Stage::Frame => "frame",
         }
     }
+
+    fn index(self) -> usize {
+        STAGES.iter().position(|s| *s == self).unwrap_or(0)
+    }
 }
 
-/// Samples per stage, milliseconds.
+/// Samples per stage, milliseconds. The markers share it read-only (the samples sit behind a
+/// lock), so that timing adds no ordering constraint between the stages it measures.
 #[derive(Resource, Default, Debug)]
 pub struct StageTimings {
-    started: [Option<Instant>; 5],
-    pub samples_ms: [Vec<f64>; 5],
+    inner: Mutex<Samples>,
+}
+
+#[derive(Default, Debug)]
+struct Samples {
+    started: [Option<Instant>; STAGES.len()],
+    ms: [Vec<f64>; STAGES.len()],
 }
 
 /// Mean and 95th percentile of one stage.
@@ -56,12 +72,22 @@ pub struct StageSummary {
 }
 
 impl StageTimings {
-    fn index(stage: Stage) -> usize {
-        Stage::ALL.iter().position(|s| *s == stage).unwrap_or(0)
+    pub fn summary(&self, stage: Stage) -> StageSummary {
+        let samples = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+        summarize(&samples.ms[stage.index()])
     }
 
-    pub fn summary(&self, stage: Stage) -> StageSummary {
-        summarize(&self.samples_ms[Self::index(stage)])
+    fn begin(&self, stage: Stage) {
+        let mut samples = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+        samples.started[stage.index()] = Some(Instant::now());
+    }
+
+    fn end(&self, stage: Stage) {
+        let mut samples = self.inner.lock().unwrap_or_else(|e| e.into_inner());
+        let i = stage.index();
+        if let Some(start) = samples.started[i].take() {
+            samples.ms[i].push(start.elapsed().as_secs_f64() * 1e3);
+        }
     }
 }
 
@@ -84,51 +110,46 @@ pub fn summarize(samples: &[f64]) -> StageSummary {
     }
 }
 
-fn begin(stage: Stage) -> impl FnMut(ResMut<StageTimings>) {
-    move |mut timings| timings.started[StageTimings::index(stage)] = Some(Instant::now())
+fn begin(stage: Stage) -> impl FnMut(Res<StageTimings>) {
+    move |timings| timings.begin(stage)
 }
 
-fn end(stage: Stage) -> impl FnMut(ResMut<StageTimings>) {
-    move |mut timings| {
-        let i = StageTimings::index(stage);
-        if let Some(start) = timings.started[i].take() {
-            timings.samples_ms[i].push(start.elapsed().as_secs_f64() * 1e3);
-        }
-    }
+fn end(stage: Stage) -> impl FnMut(Res<StageTimings>) {
+    move |timings| timings.end(stage)
 }
 
-/// Adds the marker systems.
+/// Adds the marker systems: each stage's start marker runs after the previous stage, its end
+/// marker before the next one.
 pub struct TimingPlugin;
 
 impl Plugin for TimingPlugin {
     fn build(&self, app: &mut App) {
+        fitroom_schedule::ensure(app);
         app.init_resource::<StageTimings>()
             .add_systems(First, begin(Stage::Frame))
             .add_systems(Last, end(Stage::Frame))
-            .add_systems(PreUpdate, begin(Stage::Sensor).before(SensorSystems::Poll))
-            .add_systems(PreUpdate, end(Stage::Sensor).after(SensorSystems::Poll))
-            .add_systems(Update, begin(Stage::Motion).before(MotionSystems::Retarget))
-            .add_systems(
-                Update,
-                end(Stage::Motion)
-                    .after(MotionSystems::Retarget)
-                    .before(MotionSystems::ApplyPose),
-            )
-            .add_systems(
-                Update,
-                begin(Stage::Pose)
-                    .after(MotionSystems::Retarget)
-                    .before(MotionSystems::ApplyPose),
-            )
-            .add_systems(Update, end(Stage::Pose).after(MotionSystems::ApplyPose))
             .add_systems(
                 PostUpdate,
-                begin(Stage::TransformPropagate).before(TransformSystems::Propagate),
-            )
-            .add_systems(
-                PostUpdate,
-                end(Stage::TransformPropagate).after(TransformSystems::Propagate),
+                (
+                    begin(Stage::TransformPropagate)
+                        .after(FitroomSystems::Pose)
+                        .before(TransformSystems::Propagate),
+                    end(Stage::TransformPropagate)
+                        .after(TransformSystems::Propagate)
+                        .before(FitroomSystems::Measure),
+                ),
             );
+        for (k, stage) in FitroomSystems::ALL.into_iter().enumerate() {
+            let mut start = begin(Stage::Systems(stage)).into_configs().before(stage);
+            let mut stop = end(Stage::Systems(stage)).into_configs().after(stage);
+            if let Some(&previous) = k.checked_sub(1).and_then(|p| FitroomSystems::ALL.get(p)) {
+                start = start.after(previous);
+            }
+            if let Some(&next) = FitroomSystems::ALL.get(k + 1) {
+                stop = stop.before(next);
+            }
+            app.add_systems(PostUpdate, (start, stop));
+        }
     }
 }
 

@@ -60,12 +60,12 @@ fn bad_frames_never_reach_the_avatar() {
         }
     }
     let motion = app.world().resource::<AvatarMotion>();
-    let rejected = motion.gate.stats().rejected_total();
+    let rejected = motion.pipeline.gate.stats().rejected_total();
     assert_eq!(
         rejected,
         3,
         "rejections by reason: {:?}",
-        motion.gate.stats()
+        motion.pipeline.gate.stats()
     );
     assert!(
         motion.frames_applied >= 55,

@@ -76,6 +76,8 @@
 //! CRC, decodes, and then checks indices and lengths ([`BodyModel::validate`]). Any change to
 //! the payload layout bumps [`FORMAT_VERSION`].
 
+#![forbid(unsafe_code)]
+
 pub mod ansur;
 pub mod asset;
 mod codec;

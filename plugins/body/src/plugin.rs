@@ -23,6 +23,7 @@ use bevy::{
     },
     prelude::*,
 };
+use fitroom_schedule::FitroomSystems;
 
 use crate::{BodyModel, MODEL_TO_SENSOR, Measurements, RestPose, Shape, ShapedBody};
 
@@ -66,6 +67,8 @@ impl AvatarBody {
 pub enum BodySystems {
     /// Applies a changed [`AvatarShape`] (then [`AvatarBody`] has changed too).
     Reshape,
+    /// Leaves the skin a garment covers out of the drawn mesh ([`HiddenSkin`]).
+    HideCoveredSkin,
 }
 
 /// The avatar's body shape; change it to reshape the avatar.
@@ -98,8 +101,9 @@ pub struct AvatarSkin;
 #[derive(Resource, Debug, Clone, Default, PartialEq)]
 pub struct HiddenSkin(pub Option<Vec<bool>>);
 
-/// Where the avatar stands: the sensor-to-world transform.
-#[derive(Resource, Debug, Clone, Copy)]
+/// Where the avatar stands: the sensor-to-world transform (live-editable).
+#[derive(Resource, Debug, Clone, Copy, Reflect)]
+#[reflect(Resource)]
 pub struct SensorPlacement {
     /// Height of the sensor above the floor, metres.
     pub sensor_height_m: f32,
@@ -138,21 +142,31 @@ pub struct BodyPlugin {
 
 impl Plugin for BodyPlugin {
     fn build(&self, app: &mut App) {
+        fitroom_schedule::ensure(app);
         app.insert_resource(BodyRenderSettings {
             render_mesh: self.render_mesh,
         })
         .init_resource::<SensorPlacement>()
+        .register_type::<SensorPlacement>()
         .init_resource::<AvatarShape>()
         .init_resource::<AvatarMeasurements>()
         .init_resource::<HiddenSkin>()
         .add_systems(Startup, (spawn_avatar, measure_avatar))
-        .add_systems(
-            Update,
-            reshape_avatar
-                .run_if(resource_exists_and_changed::<AvatarShape>)
-                .in_set(BodySystems::Reshape),
+        .configure_sets(
+            PostUpdate,
+            (BodySystems::Reshape, BodySystems::HideCoveredSkin)
+                .chain()
+                .in_set(FitroomSystems::Pose),
         )
-        .add_systems(PostUpdate, hide_covered_skin);
+        .add_systems(
+            PostUpdate,
+            (
+                reshape_avatar
+                    .run_if(resource_exists_and_changed::<AvatarShape>)
+                    .in_set(BodySystems::Reshape),
+                hide_covered_skin.in_set(BodySystems::HideCoveredSkin),
+            ),
+        );
     }
 }
 

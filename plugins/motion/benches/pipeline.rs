@@ -6,8 +6,9 @@ use std::{hint::black_box, path::Path};
 
 use criterion::{Criterion, criterion_group, criterion_main};
 use fitroom_motion::{
-    eval::{AvatarPipeline, clean_stream, evaluation_noise},
-    filter::{FilterKind, FrameGate, GateDecision},
+    AvatarPipeline, MotionPipeline,
+    eval::{clean_stream, evaluation_noise},
+    filter::FilterKind,
 };
 use fitroom_sensor::{bvh_source::BvhSource, noise::corrupt_stream};
 
@@ -32,24 +33,22 @@ fn bench_pipeline(c: &mut Criterion) {
     let floor = -source.options().sensor_height_m;
 
     c.bench_function("pipeline_per_frame_20_joints", |b| {
-        let mut gate = FrameGate::new();
-        let mut filter = FilterKind::default().build();
-        let mut pipeline = AvatarPipeline::new(&skeleton, floor).expect("pipeline");
+        let mut pipeline = MotionPipeline::new(
+            AvatarPipeline::new(&skeleton, floor).expect("pipeline"),
+            FilterKind::default().build(),
+        );
         let mut i = 0usize;
         let mut accepted = 0u64;
         b.iter(|| {
             if i.is_multiple_of(frames.len()) {
                 // The clip starts again: a new user, as after a loop of the kiosk's replay.
-                gate.reset();
-                filter.reset();
                 pipeline.reset();
             }
             let frame = &frames[i % frames.len()];
             i += 1;
-            if matches!(gate.check(frame), GateDecision::Accept) {
+            if let Some(step) = pipeline.push(frame) {
                 accepted += 1;
-                let out = filter.filter(frame);
-                black_box(pipeline.pose(&out, 1.0 / 30.0));
+                black_box(step.pose);
             }
         });
         // Duplicated frames (1% in the noise model) are rejected; everything else is posed.

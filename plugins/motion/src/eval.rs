@@ -2,8 +2,9 @@
 //! motion capture"; seed 000 chapter 4 had no measurements).
 //!
 //! A clean CMU clip is replayed as a 30 Hz Kinect stream, corrupted by the seeded Kinect v1
-//! noise model, then run through the pipeline the kiosk uses: bad-frame gate -> joint filter ->
-//! retargeting -> joint limits -> foot-skate correction -> joint limits. Positions are compared
+//! noise model, then run through the pipeline the kiosk uses ([`MotionPipeline`], the same type):
+//! bad-frame gate -> joint filter -> retargeting -> joint limits -> foot-skate correction ->
+//! joint limits. Positions are compared
 //! with the clean frame each noisy frame shows (`NoisyFrame::clean_index`), so the sensor's own
 //! latency, the same for every filter, is not counted as filter lag.
 
@@ -15,17 +16,14 @@ use fitroom_sensor::{
     bvh_source::{BvhSource, BvhSourceOptions},
     noise::{KinectNoiseModel, corrupt_stream},
 };
-use glam::Vec3;
 use serde::Serialize;
 
 use crate::{
     AvatarPose, AvatarSkeleton, RetargetOptions, Retargeter,
-    filter::{FilterKind, JointFilter, UnknownFilter, gate::FrameGate, gate::GateDecision},
-    footskate::{
-        FootSkateCorrector, FootSkateError, FootSkateOptions, SkateCriteria, foot_skating,
-    },
-    limits::{JointLimits, LimitOptions},
+    filter::{FilterKind, JointFilter, UnknownFilter},
+    footskate::{FootSkateError, SkateCriteria, foot_skating},
     metrics::{self, FilterReport},
+    pipeline::{AvatarPipeline, MotionPipeline, MotionStep, PipelineError},
 };
 
 /// Which filter to evaluate.
@@ -93,6 +91,8 @@ pub enum EvalError {
     #[error(transparent)]
     Bvh(#[from] BvhError),
     #[error(transparent)]
+    Pipeline(#[from] PipelineError),
+    #[error(transparent)]
     Retarget(#[from] crate::RetargetError),
     #[error(transparent)]
     FootSkate(#[from] FootSkateError),
@@ -151,72 +151,6 @@ pub fn clean_stream(source: &BvhSource) -> Vec<SensorFrame> {
         .collect()
 }
 
-/// The pipeline after the filter: retargeting, limits, foot-skate correction, limits.
-pub struct AvatarPipeline {
-    retargeter: Retargeter,
-    limits: JointLimits,
-    footskate: FootSkateCorrector,
-    floor_y: f32,
-    feet: [Option<usize>; 2],
-    /// Horizontal distance (m) by which the foot-skate correction moved each ankle (left,
-    /// right) in the last [`AvatarPipeline::pose`].
-    pub last_foot_correction_m: [f32; 2],
-}
-
-impl AvatarPipeline {
-    pub fn new(skeleton: &AvatarSkeleton, floor_y: f32) -> Result<Self, EvalError> {
-        let options = RetargetOptions {
-            floor_y,
-            ..RetargetOptions::default()
-        };
-        Ok(Self {
-            retargeter: Retargeter::new(skeleton.clone(), options)?,
-            limits: JointLimits::new(skeleton, LimitOptions::default()),
-            footskate: FootSkateCorrector::new(skeleton.clone(), FootSkateOptions::default())?,
-            floor_y,
-            feet: [skeleton.index_of("foot_l"), skeleton.index_of("foot_r")],
-            last_foot_correction_m: [0.0; 2],
-        })
-    }
-
-    /// One filtered frame to a corrected pose.
-    pub fn pose(&mut self, frame: &SensorFrame, dt: f32) -> AvatarPose {
-        let mut pose = self.retargeter.update(frame);
-        let skeleton = self.retargeter.skeleton();
-        self.limits.clamp_pose(skeleton, &mut pose);
-        let before = self
-            .feet
-            .map(|f| f.and_then(|i| pose.heads.get(i).copied()));
-        self.footskate.correct(&mut pose, self.floor_y, dt);
-        self.limits.clamp_pose(skeleton, &mut pose);
-        for (k, (foot, was)) in self.feet.iter().zip(before).enumerate() {
-            self.last_foot_correction_m[k] = match (foot.and_then(|i| pose.heads.get(i)), was) {
-                (Some(now), Some(was)) => Vec3::new(now.x - was.x, 0.0, now.z - was.z).length(),
-                _ => 0.0,
-            };
-        }
-        pose
-    }
-
-    pub fn limits(&self) -> &JointLimits {
-        &self.limits
-    }
-
-    pub fn skeleton(&self) -> &AvatarSkeleton {
-        self.retargeter.skeleton()
-    }
-
-    pub fn retargeter(&self) -> &Retargeter {
-        &self.retargeter
-    }
-
-    /// A new user: calibrate again, forget planted feet.
-    pub fn reset(&mut self) {
-        self.retargeter.reset();
-        self.footskate.reset();
-    }
-}
-
 /// Runs the whole evaluation of one clip.
 pub fn evaluate_clip(
     path: &Path,
@@ -243,7 +177,7 @@ pub fn evaluate_clip(
         None => (clean_all.clone(), (0..clean_all.len()).collect()),
     };
 
-    let mut filter: Box<dyn JointFilter> = match &options.filter {
+    let filter: Box<dyn JointFilter> = match &options.filter {
         FilterChoice::Kind(kind) => kind.build(),
         FilterChoice::OneEuroTuned => {
             let clean_shown: Vec<SensorFrame> =
@@ -256,8 +190,7 @@ pub fn evaluate_clip(
             FilterKind::OneEuro(params).build()
         }
     };
-    let mut gate = FrameGate::new();
-    let mut pipeline = AvatarPipeline::new(skeleton, floor_y)?;
+    let mut pipeline = MotionPipeline::new(AvatarPipeline::new(skeleton, floor_y)?, filter);
     let mut raw_pipeline = Retargeter::new(
         skeleton.clone(),
         RetargetOptions {
@@ -272,23 +205,17 @@ pub fn evaluate_clip(
     let mut filtered = Vec::with_capacity(noisy.len());
     let mut poses = Vec::with_capacity(noisy.len());
     let mut raw_poses = Vec::with_capacity(noisy.len());
-    let mut last_time: Option<f64> = None;
     let mut busy_s = 0.0;
     for (frame, &shown) in noisy.iter().zip(&shows) {
         let start = Instant::now();
-        let accepted = matches!(gate.check(frame), GateDecision::Accept);
-        if !accepted {
-            // Bad frames never reach the avatar: the last output stays.
-            busy_s += start.elapsed().as_secs_f64();
-            continue;
-        }
-        let out = filter.filter(frame);
-        let dt = last_time.map_or(1.0 / 30.0, |t| (frame.timestamp_s - t).max(1e-3)) as f32;
-        last_time = Some(frame.timestamp_s);
-        let pose = pipeline.pose(&out, dt);
+        let step = pipeline.push(frame);
         busy_s += start.elapsed().as_secs_f64();
+        // Bad frames never reach the avatar: the last output stays.
+        let Some(MotionStep { filtered: out, pose }) = step else {
+            continue;
+        };
         raw_poses.push(raw_pipeline.update(frame));
-        for d in pipeline.last_foot_correction_m {
+        for d in pipeline.avatar.last_foot_correction_m {
             if d.is_finite() {
                 correction_sum += f64::from(d);
                 correction_max = correction_max.max(d);
@@ -306,7 +233,7 @@ pub fn evaluate_clip(
     let skate_out = foot_skating(skeleton, &poses, floor_y, criteria)?.ratio();
     let violations = poses
         .iter()
-        .map(|p| pipeline.limits().violations(p).len())
+        .map(|p| pipeline.avatar.limits().violations(p).len())
         .sum();
     let report = EvalReport {
         clip: clip_name,
@@ -320,7 +247,7 @@ pub fn evaluate_clip(
         foot_correction_mean_mm: (1000.0 * correction_sum / correction_count.max(1) as f64) as f32,
         foot_correction_max_mm: 1000.0 * correction_max,
         joint_limit_violations: violations,
-        rejected_frames: gate.stats().rejected_total(),
+        rejected_frames: pipeline.gate.stats().rejected_total(),
         pipeline_us_per_frame: busy_s * 1e6 / noisy.len().max(1) as f64,
     };
     Ok(ClipEvaluation {

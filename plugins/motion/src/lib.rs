@@ -6,18 +6,23 @@
 //!
 //! The core modules use no Bevy types; the `plugin` feature adds [`plugin::MotionPlugin`].
 
+#![forbid(unsafe_code)]
+
 pub mod eval;
 pub mod filter;
 pub mod footskate;
 pub mod ik;
 pub mod limits;
 pub mod metrics;
+pub mod pipeline;
 pub mod retarget;
 pub mod smoothing;
+pub mod still_pose;
 
 #[cfg(feature = "plugin")]
 pub mod plugin;
 
+pub use pipeline::{AvatarPipeline, MotionPipeline, MotionStep, PipelineError};
 pub use retarget::{
     AvatarPose, AvatarSkeleton, Calibration, RetargetError, RetargetOptions, Retargeter,
 };

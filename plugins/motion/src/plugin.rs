@@ -4,68 +4,55 @@
 //! the rejection is counted.
 
 use bevy::prelude::*;
-use fitroom_body::plugin::AvatarJoint;
+use fitroom_body::plugin::{AvatarBody, AvatarJoint, BodySystems, SensorPlacement};
+use fitroom_schedule::FitroomSystems;
 use fitroom_sensor::{SensorFrame, plugin::SensorFeed};
 
-use crate::{
-    AvatarPose,
-    eval::AvatarPipeline,
-    filter::{
-        JointFilter,
-        gate::{FrameGate, GateDecision},
-    },
-};
+use crate::{AvatarPipeline, AvatarPose, MotionPipeline, MotionStep};
 
 /// Systems of the motion plugin, in order.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 pub enum MotionSystems {
-    /// Sensor frames to an avatar pose.
+    /// Sensor frames to an avatar pose (stage `Motion`).
     Retarget,
-    /// The pose to joint transforms.
+    /// A reshaped body: the pipeline is rebuilt on its skeleton (stage `Pose`, after the
+    /// body's reshape).
+    FollowShape,
+    /// The pose to joint transforms (stage `Pose`).
     ApplyPose,
 }
 
 /// The motion pipeline and its latest output.
 #[derive(Resource)]
 pub struct AvatarMotion {
-    pub pipeline: AvatarPipeline,
-    pub gate: FrameGate,
-    pub filter: Box<dyn JointFilter>,
+    /// The same pipeline `fitroom motion eval` runs.
+    pub pipeline: MotionPipeline,
     pub pose: AvatarPose,
     /// Sensor frames turned into poses so far.
     pub frames_applied: u64,
     /// The last accepted raw frame and its filtered version (for the debug overlay).
     pub last_raw: Option<SensorFrame>,
     pub last_filtered: Option<SensorFrame>,
-    last_timestamp: Option<f64>,
 }
 
 impl AvatarMotion {
-    pub fn new(pipeline: AvatarPipeline, filter: Box<dyn JointFilter>) -> Self {
+    pub fn new(pipeline: MotionPipeline) -> Self {
         let pose = pipeline.retargeter().rest_pose();
         Self {
             pipeline,
-            gate: FrameGate::new(),
-            filter,
             pose,
             frames_applied: 0,
             last_raw: None,
             last_filtered: None,
-            last_timestamp: None,
         }
     }
 
     /// Runs one sensor frame through the pipeline; a rejected frame changes nothing.
     pub fn push(&mut self, frame: &SensorFrame) -> bool {
-        if !matches!(self.gate.check(frame), GateDecision::Accept) {
+        let Some(MotionStep { filtered, pose }) = self.pipeline.push(frame) else {
             return false;
-        }
-        let filtered = self.filter.filter(frame);
-        let dt = self
-            .last_timestamp
-            .map_or(1.0 / 30.0, |t| (frame.timestamp_s - t).max(1e-3)) as f32;
-        self.last_timestamp = Some(frame.timestamp_s);
-        self.pose = self.pipeline.pose(&filtered, dt);
+        };
+        self.pose = pose;
         self.last_raw = Some(frame.clone());
         self.last_filtered = Some(filtered);
         self.frames_applied += 1;
@@ -73,17 +60,13 @@ impl AvatarMotion {
     }
 
     /// A new avatar skeleton (the body was reshaped): the pose stays until the next frame.
-    pub fn replace_pipeline(&mut self, pipeline: AvatarPipeline) {
-        self.pipeline = pipeline;
-        self.last_timestamp = None;
+    pub fn replace_pipeline(&mut self, avatar: AvatarPipeline) {
+        self.pipeline.replace_avatar(avatar);
     }
 
     /// A new user: calibrate again and restart the filter.
     pub fn reset(&mut self) {
         self.pipeline.reset();
-        self.gate.reset();
-        self.filter.reset();
-        self.last_timestamp = None;
     }
 }
 
@@ -91,14 +74,26 @@ pub struct MotionPlugin;
 
 impl Plugin for MotionPlugin {
     fn build(&self, app: &mut App) {
-        app.configure_sets(
-            Update,
-            (MotionSystems::Retarget, MotionSystems::ApplyPose).chain(),
+        fitroom_schedule::ensure(app);
+        // The sensor and body plugins own these; initialised here too so that the plugin
+        // works alone (an app without them sees no frames and the default placement).
+        app.init_resource::<SensorFeed>()
+            .init_resource::<SensorPlacement>()
+            .configure_sets(
+            PostUpdate,
+            (
+                MotionSystems::Retarget.in_set(FitroomSystems::Motion),
+                (MotionSystems::FollowShape, MotionSystems::ApplyPose)
+                    .chain()
+                    .in_set(FitroomSystems::Pose)
+                    .after(BodySystems::Reshape),
+            ),
         )
         .add_systems(
-            Update,
+            PostUpdate,
             (
                 retarget.in_set(MotionSystems::Retarget),
+                follow_body_shape.in_set(MotionSystems::FollowShape),
                 apply_pose.in_set(MotionSystems::ApplyPose),
             ),
         );
@@ -111,6 +106,30 @@ fn retarget(feed: Res<SensorFeed>, motion: Option<ResMut<AvatarMotion>>) {
     };
     for frame in &feed.new_frames {
         motion.push(frame);
+    }
+}
+
+/// A reshaped body has other bone lengths: the motion pipeline is rebuilt on the new
+/// skeleton (the filter keeps its state; the retargeter calibrates again).
+fn follow_body_shape(
+    body: Option<Res<AvatarBody>>,
+    placement: Res<SensorPlacement>,
+    motion: Option<ResMut<AvatarMotion>>,
+) {
+    let (Some(body), Some(mut motion)) = (body, motion) else {
+        return;
+    };
+    if !body.is_changed() || body.is_added() {
+        return;
+    }
+    let pipeline = crate::avatar_skeleton(&body.model, &body.rest)
+        .map_err(|e| e.to_string())
+        .and_then(|skeleton| {
+            AvatarPipeline::new(&skeleton, -placement.sensor_height_m).map_err(|e| e.to_string())
+        });
+    match pipeline {
+        Ok(pipeline) => motion.replace_pipeline(pipeline),
+        Err(e) => error!("the motion keeps the old skeleton: {e}"),
     }
 }
 

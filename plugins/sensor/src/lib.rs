@@ -14,6 +14,8 @@
 //!
 //! The `plugin` feature adds [`plugin::SensorPlugin`].
 
+#![forbid(unsafe_code)]
+
 pub mod bvh;
 pub mod bvh_skeleton;
 pub mod bvh_source;

@@ -1,8 +1,9 @@
-//! Bevy adapter: polls the active [`SensorSource`] in `PreUpdate` and publishes the frames that
-//! became due. A source error never stops the app: the last good frame stays, the error is
+//! Bevy adapter: polls the active [`SensorSource`] in the app's `Sensor` stage
+//! ([`fitroom_schedule::FitroomSystems`]) and publishes the frames that became due. A source error never stops the app: the last good frame stays, the error is
 //! kept for the kiosk to show.
 
 use bevy::prelude::*;
+use fitroom_schedule::FitroomSystems;
 
 use crate::{SensorFrame, SensorSource};
 
@@ -34,9 +35,10 @@ pub struct SensorPlugin;
 
 impl Plugin for SensorPlugin {
     fn build(&self, app: &mut App) {
+        fitroom_schedule::ensure(app);
         app.init_resource::<SensorFeed>()
-            .configure_sets(PreUpdate, SensorSystems::Poll)
-            .add_systems(PreUpdate, poll_sensor.in_set(SensorSystems::Poll));
+            .configure_sets(PostUpdate, SensorSystems::Poll.in_set(FitroomSystems::Sensor))
+            .add_systems(PostUpdate, poll_sensor.in_set(SensorSystems::Poll));
     }
 }
 
