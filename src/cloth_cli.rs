@@ -18,8 +18,8 @@ use fitroom_body::{
 };
 use fitroom_cloth::SolverSettings;
 use fitroom_garment::sim::{GarmentSim, SimGarment};
-use fitroom_garment::{BodySurface, BuildOptions, GarmentMesh, Pattern, load_fabric};
-use fitroom_motion::eval::{AvatarPipeline, clean_stream};
+use fitroom_garment::{BodySurface, GarmentMesh, GarmentSource, Pattern};
+use fitroom_motion::{AvatarPipeline, eval::clean_stream};
 use fitroom_sensor::bvh_source::BvhSource;
 use glam::{Affine3A, Quat, Vec2, Vec3};
 use serde::Serialize;
@@ -49,51 +49,11 @@ fn mesh_garment(
     size: Option<&str>,
     edge_cm: Option<f32>,
 ) -> Result<GarmentMesh> {
-    let ext = garment
-        .extension()
-        .and_then(|e| e.to_str())
-        .map(str::to_ascii_lowercase)
-        .unwrap_or_default();
-    let mesh = match ext.as_str() {
-        "ron" => {
-            let mut pattern = Pattern::load(garment)?;
-            if let Some(edge) = edge_cm {
-                pattern.target_edge_cm = edge;
-            }
-            let labels = pattern.size_labels();
-            let size = match size {
-                Some(s) => s.to_owned(),
-                None => labels
-                    .get(labels.len() / 2)
-                    .map(|s| s.to_string())
-                    .context("the garment has no sizes")?,
-            };
-            if !labels.contains(&size.as_str()) {
-                bail!(
-                    "'{}' has no size `{size}`; its sizes: {}",
-                    garment.display(),
-                    labels.join(", ")
-                );
-            }
-            pattern
-                .build(body, &size, &BuildOptions::default())?
-                .welded(body)?
-        }
-        "obj" | "glb" | "gltf" => {
-            let fabric_path = crate::assets::assets_dir()?.join("fabrics/cotton.ron");
-            let spec = load_fabric(&fabric_path)?;
-            if ext == "obj" {
-                fitroom_garment::load_obj(garment, body, "cotton", spec)?
-            } else {
-                fitroom_garment::load_gltf(garment, body, "cotton", spec)?
-            }
-        }
-        _ => bail!(
-            "'{}': a garment is a pattern (.ron) or a mesh (.obj, .glb, .gltf)",
-            garment.display()
-        ),
-    };
-    Ok(mesh)
+    let mut source = GarmentSource::load(garment)?;
+    if let (Some(edge), Some(pattern)) = (edge_cm, source.pattern_mut()) {
+        pattern.target_edge_cm = edge;
+    }
+    Ok(source.build(body, size)?)
 }
 
 fn sim_garment(mesh: &GarmentMesh) -> SimGarment {

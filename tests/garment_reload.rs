@@ -1,11 +1,15 @@
-//! A garment or fabric file edited into a malformed state while the app runs: the app reports
-//! the file, the line and the field, and keeps simulating the garment it had; a fixed file is
-//! worn again. The whole app, headless without a renderer, on copies of the shipped files.
+//! Hot reload through the asset server, the whole app headless without a renderer, on copies of
+//! the shipped files: editing only the fabric of the worn garment dresses the avatar again in
+//! the new fabric; a fabric or garment file edited into a malformed state is reported with its
+//! file, line and field while the garment worn stays on and keeps being simulated; fixed files
+//! are worn again.
 
-use std::path::{Path, PathBuf};
-use std::time::{Duration, SystemTime};
+use std::path::PathBuf;
+use std::time::{Duration, Instant};
 
+use bevy::asset::Assets;
 use fitroom::{AppOptions, Mode, headless};
+use fitroom_garment::asset::GarmentAsset;
 use fitroom_garment::plugin::{GarmentStatus, WornGarment};
 
 /// A scratch copy of the skirt with its fabrics and size charts (the relative paths a
@@ -46,18 +50,6 @@ impl Drop for Scratch {
     }
 }
 
-/// Writes `text` to `path` with a modification time `ahead` seconds from now (so the app's
-/// watcher sees a change whatever the file system's time resolution).
-fn write(path: &Path, text: &str, ahead: u64) {
-    std::fs::write(path, text).expect("write");
-    let file = std::fs::File::options()
-        .write(true)
-        .open(path)
-        .expect("open");
-    file.set_modified(SystemTime::now() + Duration::from_secs(ahead))
-        .expect("set the modification time");
-}
-
 fn status(app: &bevy::app::App) -> GarmentStatus {
     app.world().resource::<GarmentStatus>().clone()
 }
@@ -69,6 +61,28 @@ fn worn_entities(app: &mut bevy::app::App) -> Vec<bevy::ecs::entity::Entity> {
     query.iter(world).collect()
 }
 
+/// The fabric of the garment asset the avatar was asked to wear.
+fn worn_fabric(app: &bevy::app::App) -> Option<fitroom_cloth::Fabric> {
+    let assets = app.world().resource::<Assets<GarmentAsset>>();
+    let (_, garment) = assets.iter().next()?;
+    Some(garment.0.fabric().fabric)
+}
+
+/// Updates the app (each update is 1/60 s of the app's clock; the file watcher and the asset
+/// loads run on wall-clock time) until `done` holds; panics after 20 s with `what`.
+fn run_until(app: &mut bevy::app::App, what: &str, done: impl Fn(&mut bevy::app::App) -> bool) {
+    let start = Instant::now();
+    while !done(app) {
+        assert!(
+            start.elapsed() < Duration::from_secs(20),
+            "{what}: not within 20 s; status {:?}",
+            status(app)
+        );
+        app.update();
+        std::thread::sleep(Duration::from_millis(5));
+    }
+}
+
 /// The 1-based line of the first line of `text` holding `needle`.
 fn line_of(text: &str, needle: &str) -> usize {
     text.lines()
@@ -78,18 +92,15 @@ fn line_of(text: &str, needle: &str) -> usize {
 }
 
 #[test]
-fn a_malformed_edit_is_reported_and_the_garment_kept() {
+fn edits_reload_through_the_asset_server_and_malformed_ones_keep_the_garment() {
     let scratch = Scratch::new();
     let mut options =
         AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets exist");
     options.garment = Some(scratch.garment());
     let mut app = headless::headless_app(&options).expect("app builds");
-    let mut frames = 0;
-    while status(&app).steps < 10 {
-        app.update();
-        frames += 1;
-        assert!(frames < 600, "the skirt was not worn: {:?}", status(&app));
-    }
+    run_until(&mut app, "the skirt is worn and stepped", |app| {
+        status(app).steps >= 10
+    });
     let before = status(&app);
     assert!(before.error.is_none(), "{:?}", before.error);
     // Loaded on one frame's pose and stepped on a later one's, far away: carried along, not
@@ -101,69 +112,79 @@ fn a_malformed_edit_is_reported_and_the_garment_kept() {
     let worn = worn_entities(&mut app);
     assert_eq!(worn.len(), 1);
 
-    // The garment file: a value of the wrong type. The watcher polls twice a second; the app
-    // runs 1/60 s a frame.
-    let good = std::fs::read_to_string(scratch.garment()).expect("read");
-    let bad = good.replace("fabric: \"denim\"", "fabric: 12");
-    assert_ne!(bad, good);
-    write(&scratch.garment(), &bad, 5);
-    for _ in 0..60 {
-        app.update();
-    }
-    let after = status(&app);
-    let error = after
-        .error
-        .clone()
-        .expect("the malformed garment is reported");
-    let place = format!(
-        "{}:{}:",
-        scratch.garment().display(),
-        line_of(&bad, "fabric: 12")
-    );
-    assert!(
-        error.starts_with(&place) && error.contains("in `fabric`"),
-        "expected `{place}` and the field: {error}"
-    );
-    assert_eq!(after.worn, before.worn, "the garment worn is kept");
-    assert_eq!(worn_entities(&mut app), worn, "the same garment entity");
-    assert!(
-        after.steps > before.steps + 30,
-        "the kept garment is still simulated: {} -> {} steps",
-        before.steps,
-        after.steps
-    );
-
-    // Its fabric: a value of the wrong type (the garment file fixed, so that it reloads).
+    // Only the fabric is edited (a heavier denim): the garment is dressed again with it.
     let fabric = std::fs::read_to_string(scratch.fabric()).expect("read");
+    let density = fitroom_garment::FabricSpec::from_ron_str(&fabric, "denim.ron")
+        .expect("the shipped denim")
+        .fabric
+        .areal_density_kg_m2;
+    assert_eq!(worn_fabric(&app).map(|f| f.areal_density_kg_m2), Some(density));
+    let heavier = density * 1.5;
+    let heavy_fabric = fabric.replacen(
+        "areal_density_kg_m2:",
+        &format!("areal_density_kg_m2: {heavier}, //"),
+        1,
+    );
+    assert_ne!(heavy_fabric, fabric);
+    std::fs::write(scratch.fabric(), &heavy_fabric).expect("write");
+    run_until(&mut app, "the skirt is dressed in the edited fabric", |app| {
+        worn_fabric(app).map(|f| f.areal_density_kg_m2) == Some(heavier)
+            && worn_entities(app).len() == 1
+            && worn_entities(app) != worn
+    });
+    let reworn = worn_entities(&mut app);
+    assert!(status(&app).error.is_none(), "{:?}", status(&app).error);
+
+    // The fabric broken: a value of the wrong type. Reported with file, line and field; the
+    // garment stays on and keeps being simulated.
     let bad_fabric = fabric.replacen("friction:", "friction: \"high\", //", 1);
     assert_ne!(bad_fabric, fabric);
-    write(&scratch.fabric(), &bad_fabric, 10);
-    write(&scratch.garment(), &good, 10);
-    for _ in 0..60 {
-        app.update();
-    }
-    let error = status(&app)
-        .error
-        .expect("the malformed fabric is reported");
+    std::fs::write(scratch.fabric(), &bad_fabric).expect("write");
+    run_until(&mut app, "the malformed fabric is reported", |app| {
+        status(app).error.is_some()
+    });
+    let error = status(&app).error.unwrap_or_default();
     // (Named as the garment reached it: `<garment dir>/../fabrics/denim.ron`.)
     let place = format!("fabrics/denim.ron:{}:", line_of(&bad_fabric, "friction:"));
     assert!(
         error.contains(&place) && error.contains("in `friction`"),
         "expected `{place}` and the field: {error}"
     );
-    assert_eq!(worn_entities(&mut app), worn, "the same garment entity");
-
-    // Both fixed: the skirt is worn again, without an error.
-    write(&scratch.fabric(), &fabric, 15);
-    write(&scratch.garment(), &good, 15);
-    for _ in 0..60 {
+    let steps = status(&app).steps;
+    for _ in 0..30 {
         app.update();
     }
+    assert_eq!(worn_entities(&mut app), reworn, "the same garment entity");
+    assert!(status(&app).steps > steps + 20, "the kept garment is still simulated");
+    assert_eq!(worn_fabric(&app).map(|f| f.areal_density_kg_m2), Some(heavier));
+
+    // The garment file broken too: its own file and line are reported.
+    std::fs::write(scratch.fabric(), &fabric).expect("write");
+    let good = std::fs::read_to_string(scratch.garment()).expect("read");
+    let bad = good.replace("fabric: \"denim\"", "fabric: 12");
+    assert_ne!(bad, good);
+    std::fs::write(scratch.garment(), &bad).expect("write");
+    let place = format!(
+        "{}:{}:",
+        scratch.garment().display(),
+        line_of(&bad, "fabric: 12")
+    );
+    run_until(&mut app, "the malformed garment is reported", |app| {
+        status(app)
+            .error
+            .is_some_and(|e| e.contains(&place) && e.contains("in `fabric`"))
+    });
+    assert_eq!(worn_entities(&mut app), reworn, "the same garment entity");
+
+    // Both fixed: the skirt is worn anew in the shipped denim, without an error.
+    std::fs::write(scratch.garment(), &good).expect("write");
+    run_until(&mut app, "the fixed skirt is worn again", |app| {
+        status(app).error.is_none()
+            && worn_fabric(app).map(|f| f.areal_density_kg_m2) == Some(density)
+            && worn_entities(app).len() == 1
+            && worn_entities(app) != reworn
+    });
     let fixed = status(&app);
-    assert!(fixed.error.is_none(), "{:?}", fixed.error);
-    assert_eq!(fixed.resets, 0, "blow-up resets after the reload");
+    assert_eq!(fixed.resets, 0, "blow-up resets after the reloads");
     assert_eq!(fixed.worn, before.worn);
-    let again = worn_entities(&mut app);
-    assert_eq!(again.len(), 1);
-    assert_ne!(again, worn, "the fixed file is loaded anew");
 }

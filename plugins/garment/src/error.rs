@@ -91,7 +91,7 @@ pub(crate) fn ron_error(file: &str, text: &str, e: ron::error::SpannedError) -> 
 /// `None` if the position is not inside any field's value (a field name itself, or between
 /// fields). A forward scan that skips strings and `//` comments; enough for error messages,
 /// not a parser.
-pub(crate) fn field_at(text: &str, line: usize, col: usize) -> Option<String> {
+pub fn field_at(text: &str, line: usize, col: usize) -> Option<String> {
     // Byte offset of the position (clamped to the line's end and the text's end).
     let mut at = text.len();
     let mut start = 0;
@@ -180,7 +180,7 @@ pub(crate) fn field_at(text: &str, line: usize, col: usize) -> Option<String> {
 }
 
 /// The RON options the garment and fabric files are read with: `Some(..)` may be left out.
-pub(crate) fn ron_options() -> ron::Options {
+pub fn ron_options() -> ron::Options {
     ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
 }
 

@@ -18,6 +18,8 @@
 //!   and the [`GarmentMesh`].
 //! - [`binding`]: attached vertices bound to body triangles; skin weights for the static part.
 //! - [`body`]: the shaped body surface, its landmarks and regions, nearest-triangle queries.
+//! - [`files`], [`source`]: one way to read any garment file with the files it names (from
+//!   disk, or fetched by the asset loader), and to build it on a body.
 //! - [`sim`]: a garment simulated on the posed body (cloth solver, body colliders, blow-up
 //!   reset, strain and gap).
 //! - `plugin` (feature `plugin`): the Bevy adapter: the garment the avatar wears.
@@ -46,11 +48,16 @@
 //! everything placed is in the body's model space: metres, +Y up, the body faces +Z, +X is
 //! the wearer's left.
 
+#![forbid(unsafe_code)]
+
+#[cfg(feature = "plugin")]
+pub mod asset;
 pub mod binding;
 pub mod body;
 pub mod cover;
 pub mod error;
 pub mod fabric;
+pub mod files;
 pub mod garment;
 pub mod mesh_garment;
 pub mod mesher;
@@ -59,12 +66,15 @@ pub mod placement;
 #[cfg(feature = "plugin")]
 pub mod plugin;
 pub mod sim;
+pub mod source;
 
 pub use binding::{Binding, BoundVertex, skin_weights_for};
 pub use body::{BodyPart, BodySurface, Landmark, Region, SurfacePoint};
 pub use error::GarmentError;
 pub use fabric::{FabricSpec, load_fabric};
+pub use files::{DiskFiles, FetchedFiles, GarmentFiles};
 pub use garment::{BuildOptions, GarmentMesh, SeamLine, SewReport};
 pub use mesh_garment::{AttachChannel, load_gltf, load_obj, write_glb, write_obj};
 pub use pattern::{Axis, Pattern};
 pub use placement::RowReport;
+pub use source::{GarmentFormat, GarmentSource};

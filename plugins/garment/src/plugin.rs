@@ -1,40 +1,50 @@
 //! Bevy adapter: the garment the avatar wears, simulated on worker threads at a fixed rate
 //! (120 Hz by default) within a time budget per frame, drawn with an optional fit map.
 //!
-//! * [`GarmentRequest`] names the garment file and size; changing it, reshaping the avatar, or
-//!   saving the garment file (hot reload: the file's modification time is polled twice a
-//!   second) rebuilds the garment. A file that does not load keeps the garment the avatar had
-//!   and puts the error in [`GarmentStatus`].
+//! * [`GarmentRequest`] names the garment file and size. The file is loaded through the asset
+//!   server ([`crate::asset`]: patterns, OBJ + MTL and glTF alike); changing the request,
+//!   reshaping the avatar, or saving the garment or its fabric (hot reload through Bevy's
+//!   `file_watcher`) dresses the avatar again. A file that does not load keeps the garment the
+//!   avatar had and puts the error (file, line, field) in [`GarmentStatus`].
 //! * Each frame, after transform propagation, the avatar's skinning transforms (joint global
 //!   transforms times the inverse bind poses) drive the cloth: as many 120 Hz steps as the
 //!   frame's time asks for, interpolating the body between the last frame and this one, but
 //!   no more than fit in [`ClothSettings::budget_ms`] (the rest is dropped and counted, so a
 //!   slow renderer slows the cloth down instead of stalling the app).
-//! * A blow-up resets the garment to its skinned pose and is logged; in debug builds a check
-//!   asserts that every position stays finite.
+//! * A blow-up resets the garment to its skinned pose and is logged; a panic in the cloth
+//!   step (a worker thread's included) takes the garment off with the error in
+//!   [`GarmentStatus`], and the app goes on. In debug builds a check asserts that every
+//!   position stays finite.
 //! * With [`ClothSettings::fit_map`] the garment is coloured by strain (blue: slack, white:
 //!   rest length, red: stretched 10% or more), like a CLO3D strain map.
 //! * With [`ClothSettings::hide_covered_skin`] (the default) the body's skin that the garment
 //!   surely covers is not drawn ([`crate::cover`], [`HiddenSkin`]).
 
+use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
-use std::time::{Instant, SystemTime};
+use std::time::Instant;
 
 use bevy::{
     asset::RenderAssetUsages,
     mesh::{Indices, PrimitiveTopology, VertexAttributeValues},
     prelude::*,
-    transform::TransformSystems,
 };
 use fitroom_body::{
     ShapedBody,
     plugin::{AvatarBody, AvatarJoint, HiddenSkin},
 };
 use fitroom_cloth::SolverSettings;
+use fitroom_schedule::FitroomSystems;
 use glam::Affine3A;
 
+use bevy::asset::AssetLoadFailedEvent;
+
+use crate::BodySurface;
+use crate::asset::{
+    FabricAsset, FabricLoader, GarmentAsset, GarmentLoader, SizeChartAsset, SizeChartLoader,
+    garment_asset_path,
+};
 use crate::sim::{GarmentSim, SimGarment, lerp_affine};
-use crate::{BodySurface, BuildOptions, Pattern};
 
 /// Cloth settings (live-editable).
 #[derive(Resource, Debug, Clone, Reflect)]
@@ -76,6 +86,8 @@ pub struct GarmentRequest {
 pub struct GarmentStatus {
     /// `name size` of the garment worn.
     pub worn: Option<String>,
+    /// The garment file worn (or being loaded).
+    pub file: Option<PathBuf>,
     pub particles: usize,
     /// The last load error (the garment worn stays).
     pub error: Option<String>,
@@ -100,13 +112,11 @@ pub struct WornGarment {
     surface: (Vec<Vec3>, Vec<Vec3>),
 }
 
-/// Where the garment file was when loaded, to notice edits.
+/// The garment asset requested, and whether the avatar must be dressed again.
 #[derive(Resource, Default)]
-struct Watched {
-    path: Option<PathBuf>,
-    modified: Option<SystemTime>,
-    polled_s: f32,
-    reload: bool,
+struct Wearing {
+    handle: Option<Handle<GarmentAsset>>,
+    dress: bool,
 }
 
 /// Systems of the garment plugin.
@@ -116,42 +126,122 @@ pub enum GarmentSystems {
     Step,
 }
 
-pub struct GarmentPlugin;
+/// The garment plugin; `root` is the garment folder (see [`crate::asset`]), which the app
+/// registers with [`crate::asset::register_garment_source`] before the `AssetPlugin`.
+pub struct GarmentPlugin {
+    pub root: PathBuf,
+}
 
 impl Plugin for GarmentPlugin {
     fn build(&self, app: &mut App) {
-        app.init_resource::<ClothSettings>()
+        fitroom_schedule::ensure(app);
+        app.init_asset::<GarmentAsset>()
+            .init_asset::<FabricAsset>()
+            .init_asset::<SizeChartAsset>()
+            .register_asset_loader(GarmentLoader {
+                root: self.root.clone(),
+            })
+            .register_asset_loader(FabricLoader {
+                root: self.root.clone(),
+            })
+            .register_asset_loader(SizeChartLoader {
+                root: self.root.clone(),
+            })
+            .init_resource::<ClothSettings>()
             .register_type::<ClothSettings>()
             .init_resource::<GarmentRequest>()
             .init_resource::<GarmentStatus>()
-            .init_resource::<Watched>()
-            .add_systems(
-                Update,
-                (watch_file, load_garment)
+            .init_resource::<Wearing>()
+            .insert_resource(GarmentRoot(self.root.clone()))
+            .configure_sets(
+                PostUpdate,
+                (GarmentSystems::Load, GarmentSystems::Step)
                     .chain()
-                    .in_set(GarmentSystems::Load),
+                    .in_set(FitroomSystems::Cloth),
             )
             .add_systems(
                 PostUpdate,
-                step_garment
-                    .in_set(GarmentSystems::Step)
-                    .after(TransformSystems::Propagate),
+                (
+                    (request_garment, follow_garment_asset, dress_avatar)
+                        .chain()
+                        .in_set(GarmentSystems::Load),
+                    step_garment.in_set(GarmentSystems::Step),
+                ),
             );
     }
 }
 
-fn watch_file(time: Res<Time>, request: Res<GarmentRequest>, mut watched: ResMut<Watched>) {
-    watched.polled_s += time.delta_secs();
-    if watched.polled_s < 0.5 {
+/// The garment folder.
+#[derive(Resource, Debug, Clone)]
+pub struct GarmentRoot(pub PathBuf);
+
+/// A changed request loads its file (or takes the garment off).
+#[allow(clippy::too_many_arguments)]
+fn request_garment(
+    mut commands: Commands,
+    request: Res<GarmentRequest>,
+    root: Res<GarmentRoot>,
+    server: Res<AssetServer>,
+    mut wearing: ResMut<Wearing>,
+    mut status: ResMut<GarmentStatus>,
+    worn: Query<Entity, With<WornGarment>>,
+    mut hidden: Option<ResMut<HiddenSkin>>,
+) {
+    if !request.is_changed() {
         return;
     }
-    watched.polled_s = 0.0;
+    status.file = request.path.clone();
     let Some(path) = &request.path else {
+        for e in &worn {
+            commands.entity(e).despawn();
+        }
+        *wearing = Wearing::default();
+        status.worn = None;
+        status.error = None;
+        if let Some(hidden) = hidden.as_mut() {
+            hidden.0 = None;
+        }
         return;
     };
-    let modified = std::fs::metadata(path).and_then(|m| m.modified()).ok();
-    if watched.path.as_ref() == Some(path) && modified.is_some() && modified != watched.modified {
-        watched.reload = true;
+    match garment_asset_path(&root.0, path) {
+        Ok(asset) => {
+            wearing.handle = Some(server.load(asset));
+            wearing.dress = true;
+        }
+        Err(e) => {
+            warn!("{e}");
+            status.error = Some(e);
+        }
+    }
+}
+
+/// Notices the garment asset loading, reloading, or failing to.
+fn follow_garment_asset(
+    mut events: MessageReader<AssetEvent<GarmentAsset>>,
+    mut failures: MessageReader<AssetLoadFailedEvent<GarmentAsset>>,
+    mut wearing: ResMut<Wearing>,
+    mut status: ResMut<GarmentStatus>,
+) {
+    let Some(id) = wearing.handle.as_ref().map(Handle::id) else {
+        events.clear();
+        failures.clear();
+        return;
+    };
+    for event in events.read() {
+        if let AssetEvent::Added { id: e }
+        | AssetEvent::Modified { id: e }
+        | AssetEvent::LoadedWithDependencies { id: e } = event
+            && *e == id
+        {
+            wearing.dress = true;
+        }
+    }
+    for failure in failures.read() {
+        if failure.id == id {
+            let message = first_line(&failure.error.to_string());
+            warn!("garment not (re)loaded, the avatar keeps what it wears: {message}");
+            status.error = Some(message);
+        }
     }
 }
 
@@ -249,14 +339,17 @@ pub fn strain_colour(strain_pct: f32) -> [f32; 4] {
     }
 }
 
+/// Dresses the avatar in the requested garment when its asset (re)loaded, the size changed or
+/// the body was reshaped; a garment that cannot be built keeps what the avatar wears.
 #[allow(clippy::too_many_arguments)]
-fn load_garment(
+fn dress_avatar(
     mut commands: Commands,
     request: Res<GarmentRequest>,
     body: Option<Res<AvatarBody>>,
     settings: Res<ClothSettings>,
+    garments: Res<Assets<GarmentAsset>>,
+    mut wearing: ResMut<Wearing>,
     mut status: ResMut<GarmentStatus>,
-    mut watched: ResMut<Watched>,
     worn: Query<Entity, With<WornGarment>>,
     joints: Query<(&AvatarJoint, &GlobalTransform)>,
     mut meshes: Option<ResMut<Assets<Mesh>>>,
@@ -266,22 +359,19 @@ fn load_garment(
     let Some(body) = body else {
         return;
     };
-    if !(request.is_changed() || body.is_changed() || watched.reload) {
+    if !(wearing.dress || body.is_changed()) {
         return;
     }
-    watched.reload = false;
-    let Some(path) = request.path.clone() else {
-        for e in &worn {
-            commands.entity(e).despawn();
-        }
-        status.worn = None;
-        if let Some(hidden) = hidden.as_mut() {
-            hidden.0 = None;
-        }
+    let Some(source) = wearing
+        .handle
+        .as_ref()
+        .and_then(|h| garments.get(h))
+        .map(|g| &g.0)
+    else {
+        // Not loaded yet: dressed when it is.
         return;
     };
-    watched.path = Some(path.clone());
-    watched.modified = std::fs::metadata(&path).and_then(|m| m.modified()).ok();
+    wearing.dress = false;
     type Built = (crate::GarmentMesh, GarmentSim, Option<Vec<bool>>);
     let built = (|| -> Result<Built, String> {
         let shaped = ShapedBody {
@@ -291,25 +381,8 @@ fn load_garment(
             rest_pose: body.rest.clone(),
         };
         let surface = BodySurface::new(&body.model, &shaped).map_err(|e| e.to_string())?;
-        let pattern = Pattern::load(&path).map_err(|e| e.to_string())?;
-        let labels = pattern.size_labels();
-        let size = match &request.size {
-            Some(s) if labels.contains(&s.as_str()) => s.clone(),
-            Some(s) => {
-                return Err(format!(
-                    "{}: no size `{s}`; its sizes: {}",
-                    path.display(),
-                    labels.join(", ")
-                ));
-            }
-            None => labels
-                .get(labels.len() / 2)
-                .map(|s| s.to_string())
-                .ok_or_else(|| format!("{}: no sizes", path.display()))?,
-        };
-        let mesh = pattern
-            .build(&surface, &size, &BuildOptions::default())
-            .and_then(|m| m.welded(&surface))
+        let mesh = source
+            .build(&surface, request.size.as_deref())
             .map_err(|e| e.to_string())?;
         let solver = SolverSettings {
             substeps: settings.substeps.max(1),
@@ -330,7 +403,7 @@ fn load_garment(
                 &mesh.triangles,
                 &garment.attached,
             )
-            .map_err(|e| format!("{}: {e}", path.display()))?;
+            .map_err(|e| format!("{}: {e}", source.path().display()))?;
             Some(covered)
         } else {
             None
@@ -395,27 +468,31 @@ fn load_garment(
     ));
 }
 
+#[allow(clippy::too_many_arguments)]
 fn step_garment(
+    mut commands: Commands,
     time: Res<Time>,
     settings: Res<ClothSettings>,
     body: Option<Res<AvatarBody>>,
     joints: Query<(&AvatarJoint, &GlobalTransform)>,
-    mut worn: Query<&mut WornGarment>,
+    mut worn: Query<(Entity, &mut WornGarment)>,
     mut status: ResMut<GarmentStatus>,
     mut meshes: Option<ResMut<Assets<Mesh>>>,
+    mut hidden: Option<ResMut<HiddenSkin>>,
 ) {
     let Some(body) = body else {
         return;
     };
     let skin = skinning(&body, &joints);
     let dt = 1.0 / settings.rate_hz.max(1.0);
-    for mut g in &mut worn {
+    for (entity, mut g) in &mut worn {
         let start = Instant::now();
         g.accumulated_s += time.delta_secs();
         let due = (g.accumulated_s / dt).floor() as u64;
         let previous = g.previous.take().unwrap_or_else(|| skin.clone());
         let mut pose = Vec::with_capacity(skin.len());
         let mut done = 0u64;
+        let mut taken_off = false;
         for k in 0..due {
             if start.elapsed().as_secs_f32() * 1e3 > settings.budget_ms {
                 break;
@@ -428,7 +505,29 @@ fn step_garment(
                     .zip(&skin)
                     .map(|(a, b)| lerp_affine(a, b, t)),
             );
-            match g.sim.step(&pose, dt) {
+            // A panic in the step (on this thread or a cloth worker's) must not take the
+            // app down: the garment is taken off and the error shown.
+            let stepped = catch_unwind(AssertUnwindSafe(|| g.sim.step(&pose, dt)));
+            let stepped = match stepped {
+                Ok(stepped) => stepped,
+                Err(panic) => {
+                    let message = format!(
+                        "the cloth simulation of {} failed ({}); the garment was taken off",
+                        status.worn.as_deref().unwrap_or("the garment"),
+                        panic_message(panic.as_ref())
+                    );
+                    error!("{message}");
+                    status.error = Some(message);
+                    status.worn = None;
+                    if let Some(hidden) = hidden.as_mut() {
+                        hidden.0 = None;
+                    }
+                    commands.entity(entity).despawn();
+                    taken_off = true;
+                    break;
+                }
+            };
+            match stepped {
                 Ok(s) => {
                     if s.reset {
                         warn!(
@@ -444,6 +543,9 @@ fn step_garment(
                 }
             }
             done += 1;
+        }
+        if taken_off {
+            continue;
         }
         status.steps += done;
         status.dropped_steps += due - done;
@@ -474,9 +576,33 @@ fn step_garment(
     }
 }
 
+/// The first line of an asset server error: the loader's message (a backtrace follows it when
+/// `RUST_BACKTRACE` is set; it is not for the screen).
+fn first_line(message: &str) -> String {
+    message.lines().next().unwrap_or_default().to_owned()
+}
+
+/// The message a panic carried (a `&str` or a `String`), for the screen.
+fn panic_message(panic: &(dyn std::any::Any + Send)) -> String {
+    panic
+        .downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| panic.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "a panic without a message".into())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn a_panic_message_is_read_from_either_payload() {
+        let from_str = catch_unwind(|| panic!("worker gave up")).expect_err("it panicked");
+        assert_eq!(panic_message(from_str.as_ref()), "worker gave up");
+        let n = 3;
+        let from_string = catch_unwind(|| panic!("item {n} failed")).expect_err("it panicked");
+        assert_eq!(panic_message(from_string.as_ref()), "item 3 failed");
+    }
 
     fn float3(mesh: &Mesh, id: bevy::mesh::MeshVertexAttribute) -> Vec<[f32; 3]> {
         match mesh.attribute(id) {

@@ -11,6 +11,7 @@ use glam::{Mat4, Vec2, Vec3};
 
 use crate::body::BodySurface;
 use crate::error::GarmentError;
+use crate::files::{DiskFiles, GarmentFiles};
 use crate::garment::GarmentMesh;
 
 use super::{Welder, finish, mesh_error};
@@ -22,11 +23,18 @@ pub fn load_gltf(
     fabric_name: &str,
     fabric: fitroom_cloth::Fabric,
 ) -> Result<GarmentMesh, GarmentError> {
-    let path = path.as_ref();
-    let bytes = std::fs::read(path).map_err(|source| GarmentError::Read {
-        path: path.to_owned(),
-        source,
-    })?;
+    load_gltf_with(path.as_ref(), &DiskFiles, body, fabric_name, fabric)
+}
+
+/// [`load_gltf`] with the file and its `.bin` buffers read from `files`.
+pub fn load_gltf_with(
+    path: &Path,
+    files: &dyn GarmentFiles,
+    body: &BodySurface,
+    fabric_name: &str,
+    fabric: fitroom_cloth::Fabric,
+) -> Result<GarmentMesh, GarmentError> {
+    let bytes = files.read(path)?;
     let dir = path.parent().unwrap_or(Path::new("."));
     let doc = gltf::Gltf::from_slice(&bytes)
         .map_err(|e| mesh_error(path, format!("not a valid glTF: {e}")))?;
@@ -51,9 +59,7 @@ pub fn load_gltf(
                             mesh_error(path, format!("a data URI buffer is not valid base64: {e}"))
                         })?
                 } else {
-                    let file = dir.join(uri);
-                    std::fs::read(&file)
-                        .map_err(|source| GarmentError::Read { path: file, source })?
+                    files.read(&dir.join(uri))?
                 }
             }
         };

@@ -32,8 +32,8 @@ use crate::error::GarmentError;
 use crate::garment::GarmentMesh;
 
 pub use glb_write::{AttachChannel, glb_bytes, write_glb};
-pub use gltf_read::load_gltf;
-pub use obj::{load_obj, write_obj};
+pub use gltf_read::{load_gltf, load_gltf_with};
+pub use obj::{load_obj, load_obj_with, write_obj};
 
 /// The material suffix marking simulated faces (seed 000 §3.2.1).
 pub const FREE_SUFFIX: &str = "Free";

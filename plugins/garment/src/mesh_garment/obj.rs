@@ -10,6 +10,7 @@ use glam::{Vec2, Vec3};
 
 use crate::body::BodySurface;
 use crate::error::GarmentError;
+use crate::files::{DiskFiles, GarmentFiles};
 use crate::garment::GarmentMesh;
 
 use super::{FREE_SUFFIX, Welder, finish, mesh_error};
@@ -22,14 +23,32 @@ pub fn load_obj(
     fabric_name: &str,
     fabric: fitroom_cloth::Fabric,
 ) -> Result<GarmentMesh, GarmentError> {
-    let path = path.as_ref();
+    load_obj_with(path.as_ref(), &DiskFiles, body, fabric_name, fabric)
+}
+
+/// [`load_obj`] with the OBJ and its MTL files read from `files`.
+pub fn load_obj_with(
+    path: &Path,
+    files: &dyn GarmentFiles,
+    body: &BodySurface,
+    fabric_name: &str,
+    fabric: fitroom_cloth::Fabric,
+) -> Result<GarmentMesh, GarmentError> {
     let options = tobj::LoadOptions {
         triangulate: true,
         single_index: false,
         ignore_points: true,
         ignore_lines: true,
     };
-    let (models, materials) = tobj::load_obj(path, &options)
+    let bytes = files.read(path)?;
+    let dir = path.parent().unwrap_or(Path::new("."));
+    let (models, materials) =
+        tobj::load_obj_buf(&mut std::io::Cursor::new(bytes), &options, |mtl| {
+            let mtl = files
+                .read(&dir.join(mtl))
+                .map_err(|_| tobj::LoadError::OpenFileFailed)?;
+            tobj::load_mtl_buf(&mut std::io::Cursor::new(mtl))
+        })
         .map_err(|e| mesh_error(path, format!("cannot read the OBJ: {e}")))?;
     let materials = materials.map_err(|e| {
         mesh_error(

@@ -5,7 +5,8 @@
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
-use crate::error::{GarmentError, read_text, ron_error, ron_options};
+use crate::error::{GarmentError, ron_error, ron_options};
+use crate::files::{DiskFiles, GarmentFiles};
 use crate::fabric::FabricSpec;
 use fitroom_body::sizing::SizeChart;
 
@@ -17,15 +18,29 @@ impl Pattern {
     /// Reads and validates a garment file, its fabric (`<dir>/../fabrics/<fabric>.ron`) and its
     /// size chart, if it names one (relative to the garment file).
     pub fn load(path: impl AsRef<Path>) -> Result<Pattern, GarmentError> {
-        let path = path.as_ref();
-        let text = read_text(path)?;
+        Self::load_with(path.as_ref(), &DiskFiles)
+    }
+
+    /// [`Pattern::load`] with the garment file and the files it names read from `files`.
+    pub fn load_with(path: &Path, files: &dyn GarmentFiles) -> Result<Pattern, GarmentError> {
+        let text = files.read_text(path)?;
         let dir = path.parent().unwrap_or(Path::new("."));
-        Self::from_ron_str(&text, &path.display().to_string(), dir)
+        Self::from_ron_str_with(&text, &path.display().to_string(), dir, files)
     }
 
     /// Parses and validates a garment from RON text; `file` names it in errors and `dir` is the
     /// folder relative paths (fabric, size chart) are resolved against.
     pub fn from_ron_str(text: &str, file: &str, dir: &Path) -> Result<Pattern, GarmentError> {
+        Self::from_ron_str_with(text, file, dir, &DiskFiles)
+    }
+
+    /// [`Pattern::from_ron_str`] with the fabric and size chart read from `files`.
+    pub fn from_ron_str_with(
+        text: &str,
+        file: &str,
+        dir: &Path,
+        files: &dyn GarmentFiles,
+    ) -> Result<Pattern, GarmentError> {
         let raw: GarmentFile = ron_options()
             .from_str(text)
             .map_err(|e| ron_error(file, text, e))?;
@@ -41,7 +56,10 @@ impl Pattern {
 
         // Fabric.
         let fabric_path = fabric_path(dir, &raw.fabric);
-        let fabric = FabricSpec::load(&fabric_path).map_err(|e| match e {
+        let fabric = files
+            .read_text(&fabric_path)
+            .and_then(|text| FabricSpec::from_ron_str(&text, &fabric_path.display().to_string()))
+            .map_err(|e| match e {
             GarmentError::Read { .. } => problems.at(
                 &["fabric"],
                 "fabric",
@@ -273,7 +291,11 @@ impl Pattern {
         let chart = match &raw.size_chart {
             Some(rel) => {
                 let path = dir.join(rel);
-                Some(SizeChart::load(&path).map_err(|e| {
+                let chart = files.read_text(&path).map_err(|e| e.to_string()).and_then(|text| {
+                    SizeChart::from_ron_str(&text, &path.display().to_string())
+                        .map_err(|e| e.to_string())
+                });
+                Some(chart.map_err(|e| {
                     problems.at(
                         &["size_chart"],
                         "size_chart",

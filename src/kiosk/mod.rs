@@ -3,7 +3,8 @@
 
 use bevy::prelude::*;
 use fitroom_body::plugin::Avatar;
-use fitroom_motion::plugin::AvatarMotion;
+use fitroom_motion::plugin::{AvatarMotion, MotionSystems};
+use fitroom_schedule::FitroomSystems;
 use fitroom_sensor::{KinectJoint, plugin::SensorFeed};
 
 /// Kiosk screens.
@@ -28,8 +29,9 @@ impl KioskState {
     }
 }
 
-/// Timing of the kiosk flow.
-#[derive(Resource, Debug, Clone, Copy)]
+/// Timing of the kiosk flow (live-editable).
+#[derive(Resource, Debug, Clone, Copy, Reflect)]
+#[reflect(Resource)]
 pub struct KioskTimings {
     /// Seconds a person must be tracked in `Calibrate` before `TryOn`.
     pub calibrate_s: f32,
@@ -110,20 +112,88 @@ fn draw_debug_skeletons(
 #[derive(Component)]
 pub struct MirrorCamera;
 
-pub struct KioskPlugin;
+/// Systems of the kiosk plugin.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub enum KioskSystems {
+    /// The camera follows the posed avatar (stage `Pose`, after the pose is applied, so the
+    /// camera is propagated with it in the same frame).
+    FrameCamera,
+    /// Whether a person is there, and the kiosk's state transitions (stage `Ui`).
+    Flow,
+    /// Debug drawing (stage `Ui`, after the flow).
+    Debug,
+}
+
+/// The kiosk flow, the camera, and the configuration file (`config`, read from
+/// `config_path`; followed for edits when it lies in the assets folder).
+pub struct KioskPlugin {
+    pub config: config::KioskConfig,
+    pub config_path: std::path::PathBuf,
+}
 
 impl Plugin for KioskPlugin {
     fn build(&self, app: &mut App) {
+        fitroom_schedule::ensure(app);
+        let assets = crate::assets::assets_dir().ok();
+        let watched = assets.as_ref().and_then(|a| {
+            let a = std::path::absolute(a).ok()?;
+            let file = std::path::absolute(&self.config_path).ok()?;
+            file.strip_prefix(&a).ok().map(|p| (a.clone(), p.to_owned()))
+        });
+        let mut active = config::ActiveKioskConfig {
+            config: self.config.clone(),
+            handle: None,
+            error: None,
+        };
+        let has_assets = app.world().contains_resource::<AssetServer>();
+        if has_assets {
+            let root = watched
+                .as_ref()
+                .map(|(root, _)| root.clone())
+                .or(assets)
+                .unwrap_or_default();
+            app.init_asset::<config::KioskConfig>()
+                .register_asset_loader(config::KioskConfigLoader { root })
+                .add_systems(
+                    PostUpdate,
+                    config::follow_config
+                        .in_set(KioskSystems::Flow)
+                        .before(track_person),
+                );
+            if let Some((_, relative)) = watched {
+                active.handle = Some(app.world().resource::<AssetServer>().load(relative));
+            }
+        }
         app.init_state::<KioskState>()
-            .init_resource::<KioskTimings>()
+            .insert_resource(self.config.kiosk_timings())
+            .insert_resource(active)
+            .register_type::<KioskTimings>()
             .init_resource::<KioskStatus>()
             .init_resource::<DebugSkeletons>()
-            .add_systems(Update, (track_person, kiosk_transitions).chain())
+            .configure_sets(
+                PostUpdate,
+                (
+                    KioskSystems::FrameCamera
+                        .in_set(FitroomSystems::Pose)
+                        .after(MotionSystems::ApplyPose),
+                    (KioskSystems::Flow, KioskSystems::Debug)
+                        .chain()
+                        .in_set(FitroomSystems::Ui),
+                ),
+            )
             .add_systems(Update, toggle_debug_skeletons)
-            .add_systems(PostUpdate, frame_person);
+            .add_systems(
+                PostUpdate,
+                (
+                    frame_person.in_set(KioskSystems::FrameCamera),
+                    (track_person, kiosk_transitions)
+                        .chain()
+                        .in_set(KioskSystems::Flow),
+                ),
+            );
         if app.is_plugin_added::<bevy::gizmos::GizmoPlugin>() {
             app.add_systems(Startup, skeletons_on_top)
-                .add_systems(PostUpdate, draw_debug_skeletons);
+                .add_systems(PostUpdate, draw_debug_skeletons.in_set(KioskSystems::Debug));
         }
     }
 }
@@ -229,83 +299,5 @@ pub fn snap_camera(world: &mut World) {
     }
 }
 
-/// The egui status overlay: frame rate, kiosk state, sensor and calibration.
-pub mod ui {
-    use bevy::diagnostic::{DiagnosticsStore, FrameTimeDiagnosticsPlugin};
-    use bevy::prelude::*;
-    use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
-    use fitroom_motion::plugin::AvatarMotion;
-    use fitroom_sensor::plugin::SensorFeed;
-
-    use super::{KioskState, KioskStatus};
-
-    pub struct OverlayPlugin;
-
-    impl Plugin for OverlayPlugin {
-        fn build(&self, app: &mut App) {
-            if !app.is_plugin_added::<FrameTimeDiagnosticsPlugin>() {
-                app.add_plugins(FrameTimeDiagnosticsPlugin::default());
-            }
-            app.add_plugins(EguiPlugin::default())
-                .add_systems(EguiPrimaryContextPass, status_overlay);
-        }
-    }
-
-    fn status_overlay(
-        mut contexts: EguiContexts,
-        diagnostics: Res<DiagnosticsStore>,
-        state: Res<State<KioskState>>,
-        status: Res<KioskStatus>,
-        feed: Res<SensorFeed>,
-        motion: Option<Res<AvatarMotion>>,
-        debug: Res<super::DebugSkeletons>,
-    ) -> Result {
-        let fps = diagnostics
-            .get(&FrameTimeDiagnosticsPlugin::FPS)
-            .and_then(|d| d.smoothed())
-            .unwrap_or(0.0);
-        let ctx = contexts.ctx_mut()?;
-        egui::Area::new(egui::Id::new("kiosk-status"))
-            .anchor(egui::Align2::LEFT_TOP, egui::vec2(16.0, 16.0))
-            .show(ctx, |ui| {
-                egui::Frame::popup(ui.style()).show(ui, |ui| {
-                    ui.heading("fitroom");
-                    ui.label(format!("{fps:.0} fps"));
-                    ui.label(state.get().label());
-                    ui.label(format!(
-                        "sensor: {} ({} frames)",
-                        if feed.source_name.is_empty() {
-                            "none"
-                        } else {
-                            &feed.source_name
-                        },
-                        feed.frames_received
-                    ));
-                    if let Some(motion) = motion.as_ref() {
-                        if let Some(c) = motion.pipeline.retargeter().calibration() {
-                            ui.label(format!("avatar/person leg ratio {:.2}", c.scale));
-                        }
-                        let rejected = motion.gate.stats().rejected_total();
-                        if rejected > 0 {
-                            ui.colored_label(
-                                egui::Color32::from_rgb(230, 160, 60),
-                                format!("bad sensor frames ignored: {rejected}"),
-                            );
-                        }
-                    }
-                    ui.label(if debug.0 {
-                        "skeletons: raw (red), filtered (green) — D hides"
-                    } else {
-                        "D: show the sensor skeletons"
-                    });
-                    if *state.get() == KioskState::Calibrate {
-                        ui.label(format!("measuring… {:.1} s", status.tracked_s));
-                    }
-                    if let Some(error) = &feed.error {
-                        ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);
-                    }
-                });
-            });
-        Ok(())
-    }
-}
+pub mod config;
+pub mod ui;

@@ -1,0 +1,303 @@
+//! The kiosk's configuration file (`assets/kiosk.ron`): where the frames come from, the
+//! flow's timings, the garments offered, and the display.
+//!
+//! It is read once at start (the window and the sensor need it before the app runs) and then
+//! watched through the asset server ([`KioskConfigLoader`]): an edit of the timings or of the
+//! garment list takes effect while the kiosk runs; an edit that does not parse keeps the last
+//! good configuration and the kiosk shows the error (file, line, field).
+
+use std::path::{Path, PathBuf};
+
+use bevy::asset::io::Reader;
+use bevy::asset::{AssetLoadFailedEvent, AssetLoader, LoadContext};
+use bevy::prelude::*;
+use fitroom_garment::error::{field_at, ron_options};
+use serde::Deserialize;
+
+use super::KioskTimings;
+
+/// The file the kiosk reads by default, relative to `assets/`.
+pub const DEFAULT_CONFIG: &str = "kiosk.ron";
+
+/// What the kiosk shows and how it behaves.
+#[derive(Asset, TypePath, Debug, Clone, PartialEq, Deserialize)]
+#[serde(rename = "KioskConfig", deny_unknown_fields)]
+pub struct KioskConfig {
+    /// Where skeleton frames come from: `bvh:FILE`, a recorded clip replayed as a Kinect v1
+    /// stream (FILE relative to `assets/`, or absolute).
+    pub sensor: String,
+    pub timings: TimingsConfig,
+    /// The garments offered, in order; the first is worn by default.
+    pub garments: Vec<GarmentEntry>,
+    pub display: DisplayConfig,
+}
+
+/// [`KioskTimings`] as written.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct TimingsConfig {
+    /// Seconds a person must be tracked in `Calibrate` before `TryOn` (0.1-60).
+    pub calibrate_s: f32,
+    /// Seconds without a tracked person before going back to `Attract` (0.1-600).
+    pub lost_s: f32,
+}
+
+/// One garment offered.
+#[derive(Debug, Clone, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GarmentEntry {
+    /// A garment file (pattern `.ron`, `.obj`, `.glb`), relative to `assets/`.
+    pub file: String,
+    /// Its size (default: the middle one, until the person is measured).
+    #[serde(default)]
+    pub size: Option<String>,
+}
+
+/// The window.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DisplayConfig {
+    /// Borderless full screen (the mirror); `false`: a window of `width` x `height`.
+    pub fullscreen: bool,
+    pub width: u32,
+    pub height: u32,
+}
+
+/// Why a configuration file is refused.
+#[derive(Debug, thiserror::Error)]
+pub enum KioskConfigError {
+    #[error("cannot read '{}': {source}", path.display())]
+    Read {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{file}:{line}:{col}: {}{message}", .field.as_ref().map(|f| format!("in `{f}`: ")).unwrap_or_default())]
+    Syntax {
+        file: String,
+        line: usize,
+        col: usize,
+        field: Option<String>,
+        message: String,
+    },
+    #[error("{file}:{line}: `{field}`: {problem}")]
+    Invalid {
+        file: String,
+        line: usize,
+        field: String,
+        problem: String,
+    },
+}
+
+impl KioskConfig {
+    /// Reads and checks a configuration file.
+    pub fn load(path: &Path) -> Result<Self, KioskConfigError> {
+        let text = std::fs::read_to_string(path).map_err(|source| KioskConfigError::Read {
+            path: path.to_owned(),
+            source,
+        })?;
+        Self::from_ron_str(&text, &path.display().to_string())
+    }
+
+    /// Parses and checks a configuration; `file` names it in errors.
+    pub fn from_ron_str(text: &str, file: &str) -> Result<Self, KioskConfigError> {
+        let config: KioskConfig = ron_options().from_str(text).map_err(|e| {
+            let (line, col) = (e.span.start.line, e.span.start.col);
+            KioskConfigError::Syntax {
+                file: file.to_owned(),
+                line,
+                col,
+                field: field_at(text, line, col),
+                message: e.code.to_string(),
+            }
+        })?;
+        let invalid = |needle: &str, field: &str, problem: String| KioskConfigError::Invalid {
+            file: file.to_owned(),
+            line: text
+                .lines()
+                .position(|l| l.trim_start().starts_with(needle))
+                .map_or(1, |i| i + 1),
+            field: field.to_owned(),
+            problem,
+        };
+        let t = config.timings;
+        if !(0.1..=60.0).contains(&t.calibrate_s) {
+            return Err(invalid(
+                "calibrate_s",
+                "timings.calibrate_s",
+                format!("is {} s; accepted 0.1..=60 s", t.calibrate_s),
+            ));
+        }
+        if !(0.1..=600.0).contains(&t.lost_s) {
+            return Err(invalid(
+                "lost_s",
+                "timings.lost_s",
+                format!("is {} s; accepted 0.1..=600 s", t.lost_s),
+            ));
+        }
+        let d = config.display;
+        for (name, value) in [("width", d.width), ("height", d.height)] {
+            if !(240..=16_384).contains(&value) {
+                return Err(invalid(
+                    name,
+                    &format!("display.{name}"),
+                    format!("is {value} pixels; accepted 240..=16384"),
+                ));
+            }
+        }
+        if config.sensor_clip().is_none() {
+            return Err(invalid(
+                "sensor",
+                "sensor",
+                format!(
+                    "\"{}\" is not a sensor; give `bvh:FILE` (a recorded clip)",
+                    config.sensor
+                ),
+            ));
+        }
+        if let Some(g) = config.garments.iter().find(|g| {
+            fitroom_garment::GarmentFormat::of(Path::new(&g.file)).is_err()
+        }) {
+            return Err(invalid(
+                "garments",
+                "garments",
+                format!(
+                    "\"{}\" is not a garment file (.ron, .obj, .glb, .gltf)",
+                    g.file
+                ),
+            ));
+        }
+        Ok(config)
+    }
+
+    /// The clip of a `bvh:FILE` sensor.
+    pub fn sensor_clip(&self) -> Option<&str> {
+        self.sensor.strip_prefix("bvh:").filter(|f| !f.is_empty())
+    }
+
+    /// The timings as the kiosk's resource.
+    pub fn kiosk_timings(&self) -> KioskTimings {
+        KioskTimings {
+            calibrate_s: self.timings.calibrate_s,
+            lost_s: self.timings.lost_s,
+        }
+    }
+}
+
+/// Reads [`KioskConfig`] files through the asset server; `root` is the assets folder, so that
+/// errors name the file on disk.
+#[derive(TypePath)]
+pub struct KioskConfigLoader {
+    pub root: PathBuf,
+}
+
+impl AssetLoader for KioskConfigLoader {
+    type Asset = KioskConfig;
+    type Settings = ();
+    type Error = KioskConfigError;
+
+    async fn load(
+        &self,
+        reader: &mut dyn Reader,
+        _settings: &(),
+        load_context: &mut LoadContext<'_>,
+    ) -> Result<KioskConfig, KioskConfigError> {
+        let path = self.root.join(load_context.path().path());
+        let mut bytes = Vec::new();
+        reader
+            .read_to_end(&mut bytes)
+            .await
+            .map_err(|source| KioskConfigError::Read {
+                path: path.clone(),
+                source,
+            })?;
+        KioskConfig::from_ron_str(&String::from_utf8_lossy(&bytes), &path.display().to_string())
+    }
+}
+
+/// The configuration in force, the asset watched for edits, and the last edit's error.
+#[derive(Resource, Debug)]
+pub struct ActiveKioskConfig {
+    pub config: KioskConfig,
+    pub handle: Option<Handle<KioskConfig>>,
+    pub error: Option<String>,
+}
+
+/// An edited configuration takes effect (timings, garment list); a broken one is reported.
+pub fn follow_config(
+    mut events: MessageReader<AssetEvent<KioskConfig>>,
+    mut failures: MessageReader<AssetLoadFailedEvent<KioskConfig>>,
+    configs: Res<Assets<KioskConfig>>,
+    mut active: ResMut<ActiveKioskConfig>,
+    mut timings: ResMut<KioskTimings>,
+) {
+    let Some(id) = active.handle.as_ref().map(Handle::id) else {
+        events.clear();
+        failures.clear();
+        return;
+    };
+    for event in events.read() {
+        if let AssetEvent::Modified { id: e } | AssetEvent::LoadedWithDependencies { id: e } =
+            event
+            && *e == id
+            && let Some(config) = configs.get(id)
+        {
+            if *config != active.config {
+                info!("kiosk configuration changed");
+                *timings = config.kiosk_timings();
+                active.config = config.clone();
+            }
+            active.error = None;
+        }
+    }
+    for failure in failures.read() {
+        if failure.id == id {
+            let message = failure.error.to_string();
+            // The loader's message is one line; what follows (a backtrace when
+            // RUST_BACKTRACE is set) is not for the screen.
+            let message = message.lines().next().unwrap_or_default().to_owned();
+            warn!("the kiosk keeps its configuration: {message}");
+            active.error = Some(message);
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const SHIPPED: &str = include_str!("../../assets/kiosk.ron");
+
+    #[test]
+    fn the_shipped_configuration_reads() {
+        let config = KioskConfig::from_ron_str(SHIPPED, "kiosk.ron").expect("valid");
+        assert_eq!(config.sensor_clip(), Some("motions/walk.bvh"));
+        assert!(config.garments.len() >= 3);
+        assert!(config.timings.calibrate_s > 0.0);
+    }
+
+    #[test]
+    fn errors_name_file_line_and_field() {
+        let bad = SHIPPED.replacen("lost_s: 3.0", "lost_s: \"long\"", 1);
+        assert_ne!(bad, SHIPPED);
+        let e = KioskConfig::from_ron_str(&bad, "kiosk.ron").expect_err("a string is no time");
+        let line = bad.lines().position(|l| l.contains("lost_s")).expect("line") + 1;
+        let message = e.to_string();
+        assert!(message.starts_with(&format!("kiosk.ron:{line}:")), "{message}");
+        assert!(message.contains("lost_s"), "{message}");
+
+        let bad = SHIPPED.replacen("lost_s: 3.0", "lost_s: -1.0", 1);
+        let message = KioskConfig::from_ron_str(&bad, "kiosk.ron")
+            .expect_err("negative time")
+            .to_string();
+        assert!(
+            message.starts_with(&format!("kiosk.ron:{line}: `timings.lost_s`")),
+            "{message}"
+        );
+
+        let bad = SHIPPED.replacen("bvh:motions/walk.bvh", "webcam", 1);
+        let message = KioskConfig::from_ron_str(&bad, "kiosk.ron")
+            .expect_err("unknown sensor")
+            .to_string();
+        assert!(message.contains("`sensor`") && message.contains("bvh:FILE"), "{message}");
+    }
+}

@@ -1,0 +1,96 @@
+//! The egui status overlay: frame rate, kiosk state, sensor, calibration, the garment worn
+//! and the last load error.
+
+use bevy::diagnostic::{DiagnosticsStore, FrameTimeDiagnosticsPlugin};
+use bevy::prelude::*;
+use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
+use fitroom_motion::plugin::AvatarMotion;
+use fitroom_garment::plugin::GarmentStatus;
+use fitroom_sensor::plugin::SensorFeed;
+
+use super::{KioskState, KioskStatus};
+
+pub struct OverlayPlugin;
+
+impl Plugin for OverlayPlugin {
+    fn build(&self, app: &mut App) {
+        if !app.is_plugin_added::<FrameTimeDiagnosticsPlugin>() {
+            app.add_plugins(FrameTimeDiagnosticsPlugin::default());
+        }
+        app.add_plugins(EguiPlugin::default())
+            .add_systems(EguiPrimaryContextPass, status_overlay);
+    }
+}
+
+fn status_overlay(
+    mut contexts: EguiContexts,
+    diagnostics: Res<DiagnosticsStore>,
+    state: Res<State<KioskState>>,
+    status: Res<KioskStatus>,
+    feed: Res<SensorFeed>,
+    motion: Option<Res<AvatarMotion>>,
+    garment: Option<Res<GarmentStatus>>,
+    config: Option<Res<super::config::ActiveKioskConfig>>,
+    debug: Res<super::DebugSkeletons>,
+) -> Result {
+    let fps = diagnostics
+        .get(&FrameTimeDiagnosticsPlugin::FPS)
+        .and_then(|d| d.smoothed())
+        .unwrap_or(0.0);
+    let ctx = contexts.ctx_mut()?;
+    egui::Area::new(egui::Id::new("kiosk-status"))
+        .anchor(egui::Align2::LEFT_TOP, egui::vec2(16.0, 16.0))
+        .show(ctx, |ui| {
+            egui::Frame::popup(ui.style()).show(ui, |ui| {
+                ui.set_max_width(560.0);
+                ui.heading("fitroom");
+                ui.label(format!("{fps:.0} fps"));
+                ui.label(state.get().label());
+                ui.label(format!(
+                    "sensor: {} ({} frames)",
+                    if feed.source_name.is_empty() {
+                        "none"
+                    } else {
+                        &feed.source_name
+                    },
+                    feed.frames_received
+                ));
+                if let Some(motion) = motion.as_ref() {
+                    if let Some(c) = motion.pipeline.retargeter().calibration() {
+                        ui.label(format!("avatar/person leg ratio {:.2}", c.scale));
+                    }
+                    let rejected = motion.pipeline.gate.stats().rejected_total();
+                    if rejected > 0 {
+                        ui.colored_label(
+                            egui::Color32::from_rgb(230, 160, 60),
+                            format!("bad sensor frames ignored: {rejected}"),
+                        );
+                    }
+                }
+                ui.label(if debug.0 {
+                    "skeletons: raw (red), filtered (green) — D hides"
+                } else {
+                    "D: show the sensor skeletons"
+                });
+                if *state.get() == KioskState::Calibrate {
+                    ui.label(format!("measuring… {:.1} s", status.tracked_s));
+                }
+                if let Some(error) = &feed.error {
+                    ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);
+                }
+                if let Some(error) = config.as_ref().and_then(|c| c.error.as_ref()) {
+                    ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);
+                }
+                if let Some(garment) = garment.as_ref() {
+                    if let Some(worn) = &garment.worn {
+                        ui.label(format!("wearing: {worn}"));
+                    }
+                    if let Some(error) = &garment.error {
+                        // The last load error (file, line, field); what is worn stays.
+                        ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);
+                    }
+                }
+            });
+        });
+    Ok(())
+}
