@@ -2,10 +2,13 @@
 //! (the kiosk window, headless runs with or without offscreen rendering) and holds the CLI's
 //! commands; the logic lives in the `plugins/` crates.
 
+#![forbid(unsafe_code)]
+
 pub mod assets;
 pub mod body_cli;
 pub mod body_panel;
 pub mod cloth_cli;
+pub mod design;
 pub mod headless;
 pub mod kiosk;
 pub mod motion_cli;
@@ -24,11 +27,11 @@ use bevy::{
 };
 use fitroom_body::{
     BodyModel, Shape,
-    plugin::{AvatarBody, AvatarShape, BodyPlugin, BodySystems, SensorPlacement},
+    plugin::{AvatarBody, AvatarShape, BodyPlugin, SensorPlacement},
 };
 use fitroom_garment::plugin::{ClothSettings, GarmentPlugin, GarmentRequest};
 use fitroom_motion::{
-    eval::AvatarPipeline,
+    AvatarPipeline, MotionPipeline,
     filter::FilterKind,
     plugin::{AvatarMotion, MotionPlugin},
 };
@@ -47,6 +50,8 @@ pub enum Mode {
     Kiosk { windowed: bool },
     /// No window. With `render`, an offscreen camera renders on any Vulkan adapter.
     Headless { render: bool },
+    /// The garment designer in a window: an orbit camera and the design panel.
+    Design,
 }
 
 /// What to load.
@@ -72,15 +77,30 @@ pub struct AppOptions {
     pub garment_size: Option<String>,
     /// Colour the garment by strain.
     pub fit_map: bool,
+    /// The kiosk configuration (`assets/kiosk.ron` by default) and where it was read from.
+    pub config: kiosk::config::KioskConfig,
+    pub config_path: PathBuf,
 }
 
 impl AppOptions {
+    /// The options of the kiosk configuration `assets/kiosk.ron` (its clip drives the
+    /// avatar).
     pub fn with_defaults(mode: Mode) -> Result<Self> {
         let assets = assets::assets_dir()?;
+        Self::with_config(mode, &assets.join(kiosk::config::DEFAULT_CONFIG))
+    }
+
+    /// The options of a kiosk configuration file.
+    pub fn with_config(mode: Mode, config_path: &std::path::Path) -> Result<Self> {
+        let assets = assets::assets_dir()?;
+        let config = kiosk::config::KioskConfig::load(config_path)?;
+        let motion = config
+            .sensor_clip()
+            .map_or_else(|| assets.join(assets::DEFAULT_MOTION), |clip| assets.join(clip));
         Ok(Self {
             mode,
             body: assets.join(assets::DEFAULT_BODY),
-            motion: assets.join(assets::DEFAULT_MOTION),
+            motion,
             image_size: UVec2::new(960, 720),
             noise_seed: None,
             shape: None,
@@ -89,6 +109,8 @@ impl AppOptions {
             garment: None,
             garment_size: None,
             fit_map: false,
+            config,
+            config_path: config_path.to_owned(),
         })
     }
 }
@@ -101,7 +123,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     let load_start = std::time::Instant::now();
     let model = BodyModel::read(&options.body).with_context(|| {
         format!(
-            "cannot load the body '{}'; run `fitroom import makehuman ../shared/data/makehuman` to create it",
+            "cannot load the body '{}'; run `fitroom import makehuman DIR` (DIR: the MakeHuman data, e.g. MakeHuman's MPFB2 asset folder) to create it",
             options.body.display()
         )
     })?;
@@ -123,8 +145,10 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     };
     let skeleton = fitroom_motion::avatar_skeleton(&model, &body.rest)?;
     let floor_y = -source.options().sensor_height_m;
-    let pipeline = AvatarPipeline::new(&skeleton, floor_y)?;
-    let motion = AvatarMotion::new(pipeline, FilterKind::default().build());
+    let motion = AvatarMotion::new(MotionPipeline::new(
+        AvatarPipeline::new(&skeleton, floor_y)?,
+        FilterKind::default().build(),
+    ));
 
     let source_height = source.options().sensor_height_m;
     let source: Box<dyn SensorSource> = match options.noise_seed {
@@ -136,22 +160,40 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         None => Box::new(source),
     };
     let mut app = App::new();
+    // Garments, fabrics and size charts are assets of the garment folder (hot-reloaded):
+    // registered before the `AssetPlugin` comes with the default plugins.
+    let garment_root = garment_root(options)?;
+    fitroom_garment::asset::register_garment_source(&mut app, &garment_root);
+    // Bevy's asset server reads the product's assets folder (the kiosk configuration).
+    let asset_plugin = AssetPlugin {
+        file_path: assets::assets_dir()?.to_string_lossy().into_owned(),
+        ..default()
+    };
+    let display = options.config.display;
     let render = match options.mode {
-        Mode::Kiosk { windowed } => {
+        Mode::Kiosk { .. } | Mode::Design => {
+            let windowed = match options.mode {
+                Mode::Kiosk { windowed } => windowed,
+                _ => true,
+            };
             let window = Window {
                 title: "fitroom".into(),
-                mode: if windowed {
+                mode: if windowed || !display.fullscreen {
                     WindowMode::Windowed
                 } else {
                     WindowMode::BorderlessFullscreen(MonitorSelection::Primary)
                 },
-                resolution: (1280, 800).into(),
+                resolution: (display.width, display.height).into(),
                 ..default()
             };
-            app.add_plugins(DefaultPlugins.set(WindowPlugin {
-                primary_window: Some(window),
-                ..default()
-            }));
+            app.add_plugins(
+                DefaultPlugins
+                    .set(WindowPlugin {
+                        primary_window: Some(window),
+                        ..default()
+                    })
+                    .set(asset_plugin),
+            );
             true
         }
         Mode::Headless { render: true } => {
@@ -162,6 +204,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
                         exit_condition: ExitCondition::DontExit,
                         ..default()
                     })
+                    .set(asset_plugin)
                     .disable::<WinitPlugin>(),
             )
             .add_plugins(ScheduleRunnerPlugin::run_loop(Duration::ZERO));
@@ -172,6 +215,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
                 MinimalPlugins,
                 TransformPlugin,
                 StatesPlugin,
+                asset_plugin,
                 bevy::log::LogPlugin::default(),
             ));
             false
@@ -203,9 +247,14 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             BodyPlugin {
                 render_mesh: render,
             },
-            kiosk::KioskPlugin,
+            kiosk::KioskPlugin {
+                config: options.config.clone(),
+                config_path: options.config_path.clone(),
+            },
             timing::TimingPlugin,
-            GarmentPlugin,
+            GarmentPlugin {
+                root: garment_root,
+            },
         ))
         .insert_resource(GarmentRequest {
             path: options.garment.clone(),
@@ -214,8 +263,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         .insert_resource(ClothSettings {
             fit_map: options.fit_map,
             ..Default::default()
-        })
-        .add_systems(Update, follow_body_shape.after(BodySystems::Reshape));
+        });
 
     if render {
         app.insert_resource(ClearColor(BACKGROUND))
@@ -227,44 +275,47 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             Mode::Headless { render: true } => Some(options.image_size),
             _ => None,
         };
+        let orbit = options.mode == Mode::Design;
         app.add_systems(
             Startup,
             move |commands: Commands,
                   images: ResMut<Assets<Image>>,
                   meshes: ResMut<Assets<Mesh>>,
                   materials: ResMut<Assets<StandardMaterial>>| {
-                spawn_room(commands, images, meshes, materials, image_target)
+                spawn_room(commands, images, meshes, materials, image_target, orbit)
             },
         );
     }
-    if matches!(options.mode, Mode::Kiosk { .. }) {
-        app.add_plugins((kiosk::ui::OverlayPlugin, body_panel::BodyPanelPlugin));
+    match options.mode {
+        Mode::Kiosk { .. } => {
+            app.add_plugins((kiosk::ui::OverlayPlugin, body_panel::BodyPanelPlugin));
+        }
+        Mode::Design => {
+            app.add_plugins((bevy_egui::EguiPlugin::default(), design::DesignPlugin))
+                .insert_resource(design::Designer::new(options.shape.clone()));
+        }
+        Mode::Headless { .. } => {}
     }
     Ok(app)
 }
 
-/// A reshaped body has other bone lengths: the motion pipeline is rebuilt on the new
-/// skeleton (the filter keeps its state; the retargeter calibrates again).
-fn follow_body_shape(
-    body: Option<Res<AvatarBody>>,
-    placement: Res<SensorPlacement>,
-    motion: Option<ResMut<AvatarMotion>>,
-) {
-    let (Some(body), Some(mut motion)) = (body, motion) else {
-        return;
+/// The garment folder: the assets folder, or for a garment file outside it, the folder above
+/// the garment's own (the product's layout: `garments/`, `fabrics/`, `sizecharts/` side by side).
+fn garment_root(options: &AppOptions) -> Result<PathBuf> {
+    let assets = assets::assets_dir()?;
+    let Some(garment) = &options.garment else {
+        return Ok(assets);
     };
-    if !body.is_changed() || body.is_added() {
-        return;
+    let garment = std::path::absolute(garment)
+        .with_context(|| format!("cannot resolve the garment path '{}'", garment.display()))?;
+    if garment.starts_with(std::path::absolute(&assets).unwrap_or(assets.clone())) {
+        return Ok(assets);
     }
-    let pipeline = fitroom_motion::avatar_skeleton(&body.model, &body.rest)
-        .map_err(|e| e.to_string())
-        .and_then(|skeleton| {
-            AvatarPipeline::new(&skeleton, -placement.sensor_height_m).map_err(|e| e.to_string())
-        });
-    match pipeline {
-        Ok(pipeline) => motion.replace_pipeline(pipeline),
-        Err(e) => error!("the motion keeps the old skeleton: {e}"),
-    }
+    garment
+        .parent()
+        .and_then(|dir| dir.parent())
+        .map(PathBuf::from)
+        .with_context(|| format!("the garment '{}' has no folder above its own", garment.display()))
 }
 
 /// How long loading the inputs took.
@@ -284,6 +335,7 @@ fn spawn_room(
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
     image_target: Option<UVec2>,
+    orbit: bool,
 ) {
     // Floor: a large matte disc.
     commands.spawn((
@@ -332,6 +384,10 @@ fn spawn_room(
                 camera_transform,
                 kiosk::MirrorCamera,
             ));
+        }
+        None if orbit => {
+            let orbit = design::OrbitCamera::facing(design::DESIGN_FOCUS);
+            commands.spawn((Camera3d::default(), orbit.transform(), orbit));
         }
         None => {
             commands.spawn((Camera3d::default(), camera_transform, kiosk::MirrorCamera));

@@ -1,5 +1,7 @@
 //! The `fitroom` command: the kiosk by default, headless runs, and the data tools.
 
+#![forbid(unsafe_code)]
+
 use std::path::PathBuf;
 
 use anyhow::{Context, Result};
@@ -23,6 +25,10 @@ struct Cli {
 
 #[derive(clap::Args, Clone)]
 struct Inputs {
+    /// The kiosk configuration (RON; default: assets/kiosk.ron): sensor, timings, garments,
+    /// display. Edits are followed while the app runs.
+    #[arg(long)]
+    config: Option<PathBuf>,
     /// Converted body file (default: assets/bodies/makehuman.fitbody).
     #[arg(long)]
     body: Option<PathBuf>,
@@ -73,6 +79,23 @@ enum Command {
         #[command(flatten)]
         inputs: Inputs,
     },
+    /// The garment designer: the garment on the avatar in a window (orbit camera, poses,
+    /// sizes, bodies, fit map); saving the garment or its fabric dresses the avatar again.
+    Design {
+        /// The garment file (pattern .ron, .obj, .glb).
+        garment: PathBuf,
+        /// Save a screenshot of the window after `--frames` frames, then quit.
+        #[arg(long)]
+        screenshot: Option<PathBuf>,
+        /// Frames to run before the screenshot.
+        #[arg(long, default_value_t = 180)]
+        frames: u32,
+        /// The designer's starting pose.
+        #[arg(long, value_enum, default_value_t = DesignPose::APose)]
+        pose: DesignPose,
+        #[command(flatten)]
+        inputs: Inputs,
+    },
     /// Run the pipeline without a display server.
     Run {
         /// Required: no window (the only mode of `run`).
@@ -115,6 +138,17 @@ enum Command {
         #[command(subcommand)]
         command: MotionCommand,
     },
+}
+
+/// The designer's poses.
+#[derive(Clone, Copy, Debug, clap::ValueEnum)]
+enum DesignPose {
+    /// The avatar's rest pose: arms down and away from the body.
+    APose,
+    /// Arms raised sideways.
+    TPose,
+    /// The configured clip, looped.
+    Walk,
 }
 
 #[derive(Subcommand)]
@@ -268,8 +302,9 @@ enum BodyCommand {
     },
     /// Fit ANSUR II subjects (all, or a seeded sample per sex) and report the errors.
     Ansur {
-        /// The folder with ANSUR_II_FEMALE_Public.csv and ANSUR_II_MALE_Public.csv.
-        #[arg(long, default_value = "../shared/data/ansur2")]
+        /// The folder with ANSUR_II_FEMALE_Public.csv and ANSUR_II_MALE_Public.csv (or their
+        /// `.csv.gz`); by default the copy committed in the repository's `data/ansur2`.
+        #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ansur2"))]
         data: PathBuf,
         /// Subjects per sex (a seeded random sample); all 6,068 when absent.
         #[arg(long)]
@@ -319,12 +354,12 @@ enum BodyCommand {
 }
 
 fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
-    let defaults = AppOptions::with_defaults(mode.clone());
-    let (body, motion) = match (&inputs.body, &inputs.motion, defaults) {
-        (Some(b), Some(m), _) => (b.clone(), m.clone()),
-        (b, m, Ok(d)) => (b.clone().unwrap_or(d.body), m.clone().unwrap_or(d.motion)),
-        (_, _, Err(e)) => return Err(e),
+    let defaults = match &inputs.config {
+        Some(config) => AppOptions::with_config(mode.clone(), config)?,
+        None => AppOptions::with_defaults(mode.clone())?,
     };
+    let body = inputs.body.clone().unwrap_or(defaults.body);
+    let motion = inputs.motion.clone().unwrap_or(defaults.motion);
     let noise_seed = match inputs.noise.as_str() {
         "none" => None,
         "kinect" => Some(inputs.seed),
@@ -357,6 +392,8 @@ fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         garment: inputs.garment.clone(),
         garment_size: inputs.size.clone(),
         fit_map: inputs.fit_map,
+        config: defaults.config,
+        config_path: defaults.config_path,
     })
 }
 
@@ -377,6 +414,7 @@ fn run(cli: Cli) -> Result<()> {
         frames: 180,
         skeletons: false,
         inputs: Inputs {
+            config: None,
             body: None,
             motion: None,
             noise: "none".into(),
@@ -397,6 +435,32 @@ fn run(cli: Cli) -> Result<()> {
         } => {
             let mut app = build_app(&options(Mode::Kiosk { windowed }, &inputs)?)?;
             app.insert_resource(fitroom::kiosk::DebugSkeletons(skeletons));
+            if let Some(path) = screenshot {
+                app.add_systems(Update, screenshot_then_quit(path, frames));
+            }
+            app.run();
+        }
+        Command::Design {
+            garment,
+            screenshot,
+            frames,
+            pose,
+            mut inputs,
+        } => {
+            inputs.garment = Some(garment);
+            let motion = match pose {
+                DesignPose::APose => fitroom::design::DesignMotion::Still(
+                    fitroom_motion::still_pose::StillPose::APose,
+                ),
+                DesignPose::TPose => fitroom::design::DesignMotion::Still(
+                    fitroom_motion::still_pose::StillPose::TPose,
+                ),
+                DesignPose::Walk => fitroom::design::DesignMotion::Clip,
+            };
+            let mut app = build_app(&options(Mode::Design, &inputs)?)?;
+            app.world_mut()
+                .resource_mut::<fitroom::design::Designer>()
+                .motion = motion;
             if let Some(path) = screenshot {
                 app.add_systems(Update, screenshot_then_quit(path, frames));
             }
