@@ -106,8 +106,11 @@ pub fn read_ansur(path: &Path, female: bool) -> Result<Vec<AnsurSubject>, AnsurE
     let mut bytes = std::fs::read(path).map_err(io)?;
     if bytes.starts_with(&[0x1f, 0x8b]) {
         let mut text = Vec::with_capacity(bytes.len() * 5);
-        std::io::Read::read_to_end(&mut flate2::read::GzDecoder::new(bytes.as_slice()), &mut text)
-            .map_err(io)?;
+        std::io::Read::read_to_end(
+            &mut flate2::read::GzDecoder::new(bytes.as_slice()),
+            &mut text,
+        )
+        .map_err(io)?;
         bytes = text;
     }
     // Latin-1 to UTF-8: every byte is its own code point.
