@@ -83,7 +83,8 @@ enum Command {
     /// sizes, bodies, fit map); saving the garment or its fabric dresses the avatar again.
     Design {
         /// The garment file (pattern .ron, .obj, .glb).
-        garment: PathBuf,
+        #[arg(value_name = "GARMENT")]
+        file: PathBuf,
         /// Save a screenshot of the window after `--frames` frames, then quit.
         #[arg(long)]
         screenshot: Option<PathBuf>,
@@ -441,13 +442,13 @@ fn run(cli: Cli) -> Result<()> {
             app.run();
         }
         Command::Design {
-            garment,
+            file,
             screenshot,
             frames,
             pose,
             mut inputs,
         } => {
-            inputs.garment = Some(garment);
+            inputs.garment = Some(file);
             let motion = match pose {
                 DesignPose::APose => fitroom::design::DesignMotion::Still(
                     fitroom_motion::still_pose::StillPose::APose,

@@ -22,6 +22,7 @@ impl Plugin for OverlayPlugin {
     }
 }
 
+#[allow(clippy::too_many_arguments)]
 fn status_overlay(
     mut contexts: EguiContexts,
     diagnostics: Res<DiagnosticsStore>,
