@@ -9,7 +9,7 @@ use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPrimaryContextPass, egui};
 use fitroom_body::{
     Shape,
-    plugin::{AvatarMeasurements, AvatarShape},
+    plugin::{AvatarMeasurements, AvatarShape, SensorPlacement},
 };
 use fitroom_garment::{
     asset::GarmentAsset,
@@ -144,6 +144,7 @@ impl SensorSource for Still {
 /// them back.
 fn drive_avatar(
     mut designer: ResMut<Designer>,
+    placement: Res<SensorPlacement>,
     sensor: Option<ResMut<ActiveSensor>>,
     motion: Option<ResMut<AvatarMotion>>,
 ) {
@@ -159,7 +160,13 @@ fn drive_avatar(
                 designer.parked_sensor = Some(std::mem::replace(&mut sensor.0, Box::new(Still)));
             }
             motion.reset();
-            motion.pose = still_pose(motion.pipeline.skeleton(), pose);
+            // On the floor, as far from the sensor as the orbit camera's focus.
+            motion.pose = still_pose(
+                motion.pipeline.skeleton(),
+                pose,
+                -placement.sensor_height_m,
+                -DESIGN_FOCUS.z,
+            );
         }
         DesignMotion::Clip => {
             if let Some(parked) = designer.parked_sensor.take() {
@@ -285,7 +292,6 @@ fn design_panel(
                 &mut cloth.fit_map,
                 "fit map (strain: blue slack, red +10 %)",
             );
-            ui.label(format!("largest strain now {:.1} %", status.max_strain_pct));
             ui.label("Drag to turn around the avatar, wheel to zoom.");
         });
     Ok(())

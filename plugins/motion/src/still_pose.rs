@@ -56,12 +56,23 @@ pub fn t_pose(skeleton: &AvatarSkeleton) -> AvatarPose {
     pose
 }
 
-/// The pose of a [`StillPose`].
-pub fn still_pose(skeleton: &AvatarSkeleton, pose: StillPose) -> AvatarPose {
-    match pose {
+/// The pose of a [`StillPose`], standing on the floor at height `floor_y` (sensor space),
+/// `distance_m` in front of the sensor (the rest pose stands where the model was made).
+pub fn still_pose(
+    skeleton: &AvatarSkeleton,
+    pose: StillPose,
+    floor_y: f32,
+    distance_m: f32,
+) -> AvatarPose {
+    let mut out = match pose {
         StillPose::APose => a_pose(skeleton),
         StillPose::TPose => t_pose(skeleton),
+    };
+    let shift = Vec3::new(0.0, floor_y - skeleton.rest_floor_y, distance_m);
+    for head in &mut out.heads {
+        *head += shift;
     }
+    out
 }
 
 fn descends_from(skeleton: &AvatarSkeleton, mut bone: usize, ancestor: usize) -> bool {
