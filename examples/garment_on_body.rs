@@ -35,7 +35,11 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
 
     // Any garment file: a pattern (.ron), an OBJ + MTL or a glTF.
     let source = GarmentSource::load(&garment)?;
-    println!("{}: sizes {}", source.name(), source.size_labels().join(", "));
+    println!(
+        "{}: sizes {}",
+        source.name(),
+        source.size_labels().join(", ")
+    );
     let mesh = source.build(&body, size.as_deref())?;
     println!(
         "{} size {}: {} particles, {} attached to the body",

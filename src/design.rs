@@ -238,7 +238,10 @@ fn design_panel(
             ui.separator();
             ui.label("Size");
             ui.horizontal_wrapped(|ui| {
-                let current = request.size.clone().or_else(|| sizes.get(sizes.len() / 2).cloned());
+                let current = request
+                    .size
+                    .clone()
+                    .or_else(|| sizes.get(sizes.len() / 2).cloned());
                 for size in &sizes {
                     if ui
                         .selectable_label(current.as_deref() == Some(size), size)
@@ -269,13 +272,19 @@ fn design_panel(
                     ("T-pose", DesignMotion::Still(StillPose::TPose)),
                     ("walk", DesignMotion::Clip),
                 ] {
-                    if ui.selectable_label(designer.motion == choice, label).clicked() {
+                    if ui
+                        .selectable_label(designer.motion == choice, label)
+                        .clicked()
+                    {
                         designer.motion = choice;
                     }
                 }
             });
             ui.separator();
-            ui.checkbox(&mut cloth.fit_map, "fit map (strain: blue slack, red +10 %)");
+            ui.checkbox(
+                &mut cloth.fit_map,
+                "fit map (strain: blue slack, red +10 %)",
+            );
             ui.label(format!("largest strain now {:.1} %", status.max_strain_pct));
             ui.label("Drag to turn around the avatar, wheel to zoom.");
         });

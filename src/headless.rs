@@ -74,13 +74,12 @@ pub fn headless_app(options: &AppOptions) -> Result<App> {
         bail!("headless_app needs Mode::Headless");
     }
     let mut app = build_app(options)?;
-    app.init_resource::<RootPath>()
-        .add_systems(
-            PostUpdate,
-            track_root_path
-                .in_set(fitroom_schedule::FitroomSystems::Ui)
-                .after(kiosk::KioskSystems::Flow),
-        );
+    app.init_resource::<RootPath>().add_systems(
+        PostUpdate,
+        track_root_path
+            .in_set(fitroom_schedule::FitroomSystems::Ui)
+            .after(kiosk::KioskSystems::Flow),
+    );
     app.finish();
     app.cleanup();
     Ok(app)

@@ -118,7 +118,10 @@ fn edits_reload_through_the_asset_server_and_malformed_ones_keep_the_garment() {
         .expect("the shipped denim")
         .fabric
         .areal_density_kg_m2;
-    assert_eq!(worn_fabric(&app).map(|f| f.areal_density_kg_m2), Some(density));
+    assert_eq!(
+        worn_fabric(&app).map(|f| f.areal_density_kg_m2),
+        Some(density)
+    );
     let heavier = density * 1.5;
     let heavy_fabric = fabric.replacen(
         "areal_density_kg_m2:",
@@ -127,11 +130,15 @@ fn edits_reload_through_the_asset_server_and_malformed_ones_keep_the_garment() {
     );
     assert_ne!(heavy_fabric, fabric);
     std::fs::write(scratch.fabric(), &heavy_fabric).expect("write");
-    run_until(&mut app, "the skirt is dressed in the edited fabric", |app| {
-        worn_fabric(app).map(|f| f.areal_density_kg_m2) == Some(heavier)
-            && worn_entities(app).len() == 1
-            && worn_entities(app) != worn
-    });
+    run_until(
+        &mut app,
+        "the skirt is dressed in the edited fabric",
+        |app| {
+            worn_fabric(app).map(|f| f.areal_density_kg_m2) == Some(heavier)
+                && worn_entities(app).len() == 1
+                && worn_entities(app) != worn
+        },
+    );
     let reworn = worn_entities(&mut app);
     assert!(status(&app).error.is_none(), "{:?}", status(&app).error);
 
@@ -155,8 +162,14 @@ fn edits_reload_through_the_asset_server_and_malformed_ones_keep_the_garment() {
         app.update();
     }
     assert_eq!(worn_entities(&mut app), reworn, "the same garment entity");
-    assert!(status(&app).steps > steps + 20, "the kept garment is still simulated");
-    assert_eq!(worn_fabric(&app).map(|f| f.areal_density_kg_m2), Some(heavier));
+    assert!(
+        status(&app).steps > steps + 20,
+        "the kept garment is still simulated"
+    );
+    assert_eq!(
+        worn_fabric(&app).map(|f| f.areal_density_kg_m2),
+        Some(heavier)
+    );
 
     // The garment file broken too: its own file and line are reported.
     std::fs::write(scratch.fabric(), &fabric).expect("write");

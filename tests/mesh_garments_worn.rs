@@ -23,8 +23,16 @@ fn wears(file: &str) {
         let status = app.world().resource::<GarmentStatus>().clone();
         assert!(status.error.is_none(), "{file}: {:?}", status.error);
         if status.steps >= 60 {
-            assert_eq!(status.worn.as_deref(), Some("tube_skirt one size"), "{file}");
-            assert!(status.particles > 100, "{file}: {} particles", status.particles);
+            assert_eq!(
+                status.worn.as_deref(),
+                Some("tube_skirt one size"),
+                "{file}"
+            );
+            assert!(
+                status.particles > 100,
+                "{file}: {} particles",
+                status.particles
+            );
             assert_eq!(status.resets, 0, "{file}: blow-up resets");
             break;
         }

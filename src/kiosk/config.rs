@@ -154,9 +154,11 @@ impl KioskConfig {
                 ),
             ));
         }
-        if let Some(g) = config.garments.iter().find(|g| {
-            fitroom_garment::GarmentFormat::of(Path::new(&g.file)).is_err()
-        }) {
+        if let Some(g) = config
+            .garments
+            .iter()
+            .find(|g| fitroom_garment::GarmentFormat::of(Path::new(&g.file)).is_err())
+        {
             return Err(invalid(
                 "garments",
                 "garments",
@@ -210,7 +212,10 @@ impl AssetLoader for KioskConfigLoader {
                 path: path.clone(),
                 source,
             })?;
-        KioskConfig::from_ron_str(&String::from_utf8_lossy(&bytes), &path.display().to_string())
+        KioskConfig::from_ron_str(
+            &String::from_utf8_lossy(&bytes),
+            &path.display().to_string(),
+        )
     }
 }
 
@@ -236,8 +241,7 @@ pub fn follow_config(
         return;
     };
     for event in events.read() {
-        if let AssetEvent::Modified { id: e } | AssetEvent::LoadedWithDependencies { id: e } =
-            event
+        if let AssetEvent::Modified { id: e } | AssetEvent::LoadedWithDependencies { id: e } = event
             && *e == id
             && let Some(config) = configs.get(id)
         {
@@ -280,9 +284,16 @@ mod tests {
         let bad = SHIPPED.replacen("lost_s: 3.0", "lost_s: \"long\"", 1);
         assert_ne!(bad, SHIPPED);
         let e = KioskConfig::from_ron_str(&bad, "kiosk.ron").expect_err("a string is no time");
-        let line = bad.lines().position(|l| l.contains("lost_s")).expect("line") + 1;
+        let line = bad
+            .lines()
+            .position(|l| l.contains("lost_s"))
+            .expect("line")
+            + 1;
         let message = e.to_string();
-        assert!(message.starts_with(&format!("kiosk.ron:{line}:")), "{message}");
+        assert!(
+            message.starts_with(&format!("kiosk.ron:{line}:")),
+            "{message}"
+        );
         assert!(message.contains("lost_s"), "{message}");
 
         let bad = SHIPPED.replacen("lost_s: 3.0", "lost_s: -1.0", 1);
@@ -298,6 +309,9 @@ mod tests {
         let message = KioskConfig::from_ron_str(&bad, "kiosk.ron")
             .expect_err("unknown sensor")
             .to_string();
-        assert!(message.contains("`sensor`") && message.contains("bvh:FILE"), "{message}");
+        assert!(
+            message.contains("`sensor`") && message.contains("bvh:FILE"),
+            "{message}"
+        );
     }
 }

@@ -138,7 +138,9 @@ impl Plugin for KioskPlugin {
         let watched = assets.as_ref().and_then(|a| {
             let a = std::path::absolute(a).ok()?;
             let file = std::path::absolute(&self.config_path).ok()?;
-            file.strip_prefix(&a).ok().map(|p| (a.clone(), p.to_owned()))
+            file.strip_prefix(&a)
+                .ok()
+                .map(|p| (a.clone(), p.to_owned()))
         });
         let mut active = config::ActiveKioskConfig {
             config: self.config.clone(),

@@ -4,8 +4,8 @@
 use bevy::diagnostic::{DiagnosticsStore, FrameTimeDiagnosticsPlugin};
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
-use fitroom_motion::plugin::AvatarMotion;
 use fitroom_garment::plugin::GarmentStatus;
+use fitroom_motion::plugin::AvatarMotion;
 use fitroom_sensor::plugin::SensorFeed;
 
 use super::{KioskState, KioskStatus};

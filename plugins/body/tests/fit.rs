@@ -143,7 +143,8 @@ fn bad_requests_are_clear_errors() {
 /// is evaluated by `fitroom body ansur` (docs/STATUS.md).
 #[test]
 fn ansur_ii_subjects_are_fitted_within_half_a_centimetre() {
-    let survey = ansur::read_survey(&fitroom_testdata::ansur_dir()).unwrap_or_else(|e| panic!("{e}"));
+    let survey =
+        ansur::read_survey(&fitroom_testdata::ansur_dir()).unwrap_or_else(|e| panic!("{e}"));
     let mut subjects = Vec::new();
     for all in &survey {
         assert!(all.len() > 1900, "{} subjects", all.len());

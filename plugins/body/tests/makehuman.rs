@@ -11,8 +11,8 @@ use common::{imported, makehuman_dir, model};
 use fitroom_body::forearm::forearm_twist_study;
 use fitroom_body::import::fraction_along;
 use fitroom_body::rig::blender_to_model;
-use fitroom_testdata::read_gz_text;
 use fitroom_body::{AssetError, BodyModel, forward_kinematics, skin_positions};
+use fitroom_testdata::read_gz_text;
 use glam::{Quat, Vec3};
 
 /// The importer, run on the raw data, makes exactly the shipped asset.
@@ -24,7 +24,9 @@ fn a_fresh_import_equals_the_shipped_asset() {
         imp.import_time, imp.report
     );
     assert_eq!(imp.report.unweighted_vertices, 0);
-    imp.model.validate().expect("the imported model is consistent");
+    imp.model
+        .validate()
+        .expect("the imported model is consistent");
     assert!(
         imp.model == *model(),
         "a fresh import differs from assets/bodies/makehuman.fitbody: re-create the asset \

@@ -37,7 +37,10 @@ fn the_avatar_has_a_joint_per_bone_and_follows_its_shape() {
     let mut joints = app.world_mut().query::<&AvatarJoint>();
     assert_eq!(joints.iter(app.world()).count(), bones);
     let default_stature = stature_cm(&app);
-    assert!((160.0..175.0).contains(&default_stature), "{default_stature}");
+    assert!(
+        (160.0..175.0).contains(&default_stature),
+        "{default_stature}"
+    );
 
     app.world_mut().resource_mut::<AvatarShape>().0 = Shape {
         height: 1.0,
@@ -45,7 +48,10 @@ fn the_avatar_has_a_joint_per_bone_and_follows_its_shape() {
     };
     app.update();
     let tall = stature_cm(&app);
-    assert!(tall > default_stature + 5.0, "{default_stature} -> {tall} cm");
+    assert!(
+        tall > default_stature + 5.0,
+        "{default_stature} -> {tall} cm"
+    );
 
     // An invalid shape keeps the body and says why.
     app.world_mut().resource_mut::<AvatarShape>().0 = Shape {
@@ -54,6 +60,9 @@ fn the_avatar_has_a_joint_per_bone_and_follows_its_shape() {
     };
     app.update();
     let measured = app.world().resource::<AvatarMeasurements>();
-    assert!(measured.error.is_some(), "an out-of-range slider is reported");
+    assert!(
+        measured.error.is_some(),
+        "an out-of-range slider is reported"
+    );
     assert_eq!(stature_cm(&app), tall);
 }

@@ -127,10 +127,7 @@ mod tests {
             normalize(Path::new("assets/garments/../fabrics/./denim.ron")),
             PathBuf::from("assets/fabrics/denim.ron")
         );
-        assert_eq!(
-            normalize(Path::new("/a/b/../../c")),
-            PathBuf::from("/c")
-        );
+        assert_eq!(normalize(Path::new("/a/b/../../c")), PathBuf::from("/c"));
         assert_eq!(normalize(Path::new("../x/../y")), PathBuf::from("../y"));
     }
 
@@ -138,12 +135,17 @@ mod tests {
     fn fetched_files_record_what_is_missing() {
         let mut files = FetchedFiles::default();
         files.insert(Path::new("a/b.ron"), Ok(b"x".to_vec()));
-        assert_eq!(files.read(Path::new("a/./c/../b.ron")).ok(), Some(b"x".to_vec()));
+        assert_eq!(
+            files.read(Path::new("a/./c/../b.ron")).ok(),
+            Some(b"x".to_vec())
+        );
         assert!(files.read(Path::new("a/d.ron")).is_err());
         assert_eq!(files.take_missing(), vec![PathBuf::from("a/d.ron")]);
         assert!(files.take_missing().is_empty());
         files.insert(Path::new("a/d.ron"), Err("no such file".into()));
-        let e = files.read(Path::new("a/d.ron")).expect_err("a file that does not exist");
+        let e = files
+            .read(Path::new("a/d.ron"))
+            .expect_err("a file that does not exist");
         assert!(e.to_string().contains("no such file"), "{e}");
         assert!(files.take_missing().is_empty());
     }

@@ -85,7 +85,9 @@ impl GarmentSource {
     pub fn read(path: &Path, files: &dyn GarmentFiles) -> Result<Self, GarmentError> {
         let format = GarmentFormat::of(path)?;
         let kind = match format {
-            GarmentFormat::Pattern => SourceKind::Pattern(Box::new(Pattern::load_with(path, files)?)),
+            GarmentFormat::Pattern => {
+                SourceKind::Pattern(Box::new(Pattern::load_with(path, files)?))
+            }
             GarmentFormat::Obj | GarmentFormat::Gltf => {
                 let dir = path.parent().unwrap_or(Path::new("."));
                 let fabric_file = fabric_path(dir, MESH_GARMENT_FABRIC);
@@ -187,7 +189,11 @@ impl GarmentSource {
 
     /// The garment in `size` (default: the middle one) on `body`: a pattern is graded, placed,
     /// sewn and welded; a mesh garment is bound to the body as modelled.
-    pub fn build(&self, body: &BodySurface, size: Option<&str>) -> Result<GarmentMesh, GarmentError> {
+    pub fn build(
+        &self,
+        body: &BodySurface,
+        size: Option<&str>,
+    ) -> Result<GarmentMesh, GarmentError> {
         let size = self.resolve_size(size)?;
         match &self.kind {
             SourceKind::Pattern(pattern) => pattern
@@ -219,7 +225,11 @@ fn named_files(format: GarmentFormat, bytes: &[u8]) -> Vec<PathBuf> {
         GarmentFormat::Obj => String::from_utf8_lossy(bytes)
             .lines()
             .filter_map(|l| l.trim().strip_prefix("mtllib"))
-            .flat_map(|rest| rest.split_whitespace().map(PathBuf::from).collect::<Vec<_>>())
+            .flat_map(|rest| {
+                rest.split_whitespace()
+                    .map(PathBuf::from)
+                    .collect::<Vec<_>>()
+            })
             .collect(),
         GarmentFormat::Gltf => gltf::Gltf::from_slice(bytes)
             .map(|doc| {

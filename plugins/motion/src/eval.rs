@@ -211,7 +211,11 @@ pub fn evaluate_clip(
         let step = pipeline.push(frame);
         busy_s += start.elapsed().as_secs_f64();
         // Bad frames never reach the avatar: the last output stays.
-        let Some(MotionStep { filtered: out, pose }) = step else {
+        let Some(MotionStep {
+            filtered: out,
+            pose,
+        }) = step
+        else {
             continue;
         };
         raw_poses.push(raw_pipeline.update(frame));

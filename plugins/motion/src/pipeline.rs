@@ -154,4 +154,3 @@ impl AvatarPipeline {
         self.footskate.reset();
     }
 }
-

@@ -80,23 +80,23 @@ impl Plugin for MotionPlugin {
         app.init_resource::<SensorFeed>()
             .init_resource::<SensorPlacement>()
             .configure_sets(
-            PostUpdate,
-            (
-                MotionSystems::Retarget.in_set(FitroomSystems::Motion),
-                (MotionSystems::FollowShape, MotionSystems::ApplyPose)
-                    .chain()
-                    .in_set(FitroomSystems::Pose)
-                    .after(BodySystems::Reshape),
-            ),
-        )
-        .add_systems(
-            PostUpdate,
-            (
-                retarget.in_set(MotionSystems::Retarget),
-                follow_body_shape.in_set(MotionSystems::FollowShape),
-                apply_pose.in_set(MotionSystems::ApplyPose),
-            ),
-        );
+                PostUpdate,
+                (
+                    MotionSystems::Retarget.in_set(FitroomSystems::Motion),
+                    (MotionSystems::FollowShape, MotionSystems::ApplyPose)
+                        .chain()
+                        .in_set(FitroomSystems::Pose)
+                        .after(BodySystems::Reshape),
+                ),
+            )
+            .add_systems(
+                PostUpdate,
+                (
+                    retarget.in_set(MotionSystems::Retarget),
+                    follow_body_shape.in_set(MotionSystems::FollowShape),
+                    apply_pose.in_set(MotionSystems::ApplyPose),
+                ),
+            );
     }
 }
 

@@ -24,7 +24,11 @@ fn each_frame_of_the_feed_poses_the_joints() {
     app.add_plugins((MinimalPlugins, MotionPlugin))
         .insert_resource(AvatarMotion::new(pipeline));
     let joints: Vec<Entity> = (0..skeleton.bones.len())
-        .map(|i| app.world_mut().spawn((AvatarJoint(i), Transform::default())).id())
+        .map(|i| {
+            app.world_mut()
+                .spawn((AvatarJoint(i), Transform::default()))
+                .id()
+        })
         .collect();
 
     for frame in frames.iter().take(30) {
@@ -44,12 +48,19 @@ fn each_frame_of_the_feed_poses_the_joints() {
         root_joint.translation.distance(motion.pose.heads[root]) < 1e-6,
         "the root joint stands where the pose puts the root"
     );
-    assert!(root_joint.rotation.abs_diff_eq(motion.pose.rotations[root], 1e-6));
+    assert!(
+        root_joint
+            .rotation
+            .abs_diff_eq(motion.pose.rotations[root], 1e-6)
+    );
     // Every other joint carries its bone's local rotation of the pose.
     for (i, &e) in joints.iter().enumerate() {
         let t = app.world().get::<Transform>(e).expect("joint");
         if skeleton.bones[i].parent.is_some() {
-            assert!(t.rotation.abs_diff_eq(motion.pose.local_rotations[i], 1e-6), "bone {i}");
+            assert!(
+                t.rotation.abs_diff_eq(motion.pose.local_rotations[i], 1e-6),
+                "bone {i}"
+            );
         }
     }
 }
@@ -89,20 +100,37 @@ fn the_t_pose_raises_the_arms_and_keeps_the_bones() {
     for arm in ["upperarm_l", "upperarm_r", "lowerarm_l", "lowerarm_r"] {
         let i = skeleton.index_of(arm).expect("arm");
         let along = t.rotations[i] * Vec3::Y;
-        assert!(along.y.abs() < 1e-4 && along.z.abs() < 1e-4, "{arm}: {along}");
+        assert!(
+            along.y.abs() < 1e-4 && along.z.abs() < 1e-4,
+            "{arm}: {along}"
+        );
         let rest_along = a.rotations[i] * Vec3::Y;
-        assert!(rest_along.y < -0.2, "{arm} points down at rest: {rest_along}");
+        assert!(
+            rest_along.y < -0.2,
+            "{arm} points down at rest: {rest_along}"
+        );
     }
     let hand = skeleton.index_of("hand_l").expect("hand");
     let shoulder = skeleton.index_of("upperarm_l").expect("arm");
-    assert!((t.heads[hand].y - t.heads[shoulder].y).abs() < 0.01, "the hand at shoulder height");
+    assert!(
+        (t.heads[hand].y - t.heads[shoulder].y).abs() < 0.01,
+        "the hand at shoulder height"
+    );
     for (i, bone) in skeleton.bones.iter().enumerate() {
         if let Some(p) = bone.parent {
             let rest = a.heads[i].distance(a.heads[p]);
             let raised = t.heads[i].distance(t.heads[p]);
-            assert!((rest - raised).abs() < 1e-4, "{}: {rest} -> {raised}", bone.name);
+            assert!(
+                (rest - raised).abs() < 1e-4,
+                "{}: {rest} -> {raised}",
+                bone.name
+            );
             let local = t.rotations[p].inverse() * t.rotations[i];
-            assert!(local.abs_diff_eq(t.local_rotations[i], 1e-4), "{}", bone.name);
+            assert!(
+                local.abs_diff_eq(t.local_rotations[i], 1e-4),
+                "{}",
+                bone.name
+            );
         }
     }
     let pelvis = skeleton.index_of("pelvis").expect("pelvis");

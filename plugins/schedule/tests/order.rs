@@ -29,7 +29,15 @@ fn stages_run_in_order_around_transform_propagation() {
     assert_eq!(
         ran,
         &[
-            "sensor", "track", "motion", "pose", "propagate", "measure", "cloth", "gesture", "ui"
+            "sensor",
+            "track",
+            "motion",
+            "pose",
+            "propagate",
+            "measure",
+            "cloth",
+            "gesture",
+            "ui"
         ]
     );
 }

@@ -37,7 +37,10 @@ impl Plugin for SensorPlugin {
     fn build(&self, app: &mut App) {
         fitroom_schedule::ensure(app);
         app.init_resource::<SensorFeed>()
-            .configure_sets(PostUpdate, SensorSystems::Poll.in_set(FitroomSystems::Sensor))
+            .configure_sets(
+                PostUpdate,
+                SensorSystems::Poll.in_set(FitroomSystems::Sensor),
+            )
             .add_systems(PostUpdate, poll_sensor.in_set(SensorSystems::Poll));
     }
 }

@@ -32,7 +32,10 @@ fn frames_that_became_due_are_published_in_order() {
         app.update();
         let feed = app.world().resource::<SensorFeed>();
         for frame in &feed.new_frames {
-            assert!(frame.timestamp_s > last_timestamp, "frames arrive oldest first");
+            assert!(
+                frame.timestamp_s > last_timestamp,
+                "frames arrive oldest first"
+            );
             last_timestamp = frame.timestamp_s;
         }
         seen += feed.new_frames.len() as u64;
@@ -40,7 +43,11 @@ fn frames_that_became_due_are_published_in_order() {
     }
     let feed = app.world().resource::<SensorFeed>();
     // About 1.9-2.0 s of clock (the first update may carry no time) at 30 Hz.
-    assert!((55..=61).contains(&feed.frames_received), "{}", feed.frames_received);
+    assert!(
+        (55..=61).contains(&feed.frames_received),
+        "{}",
+        feed.frames_received
+    );
     assert_eq!(feed.source_name, "bvh:07_01");
     assert!(feed.error.is_none());
     assert!(feed.latest.is_some());
@@ -84,6 +91,12 @@ fn a_source_that_vanishes_keeps_the_last_frame_and_says_why() {
     assert_eq!(feed.frames_received, 2);
     assert!(feed.new_frames.is_empty());
     assert_eq!(feed.latest.as_ref().map(|f| f.sequence), Some(2));
-    let error = feed.error.as_deref().expect("the error is kept for the kiosk");
-    assert!(error.contains("vanishing") && error.contains("unplugged"), "{error}");
+    let error = feed
+        .error
+        .as_deref()
+        .expect("the error is kept for the kiosk");
+    assert!(
+        error.contains("vanishing") && error.contains("unplugged"),
+        "{error}"
+    );
 }

@@ -6,8 +6,8 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 
 use crate::error::{GarmentError, ron_error, ron_options};
-use crate::files::{DiskFiles, GarmentFiles};
 use crate::fabric::FabricSpec;
+use crate::files::{DiskFiles, GarmentFiles};
 use fitroom_body::sizing::SizeChart;
 
 use super::file::{GarmentFile, Problems, quoted};
@@ -59,7 +59,8 @@ impl Pattern {
         let fabric = files
             .read_text(&fabric_path)
             .and_then(|text| FabricSpec::from_ron_str(&text, &fabric_path.display().to_string()))
-            .map_err(|e| match e {
+            .map_err(|e| {
+                match e {
             GarmentError::Read { .. } => problems.at(
                 &["fabric"],
                 "fabric",
@@ -73,7 +74,8 @@ impl Pattern {
                 ),
             ),
             other => other,
-        })?;
+        }
+            })?;
 
         // Panels.
         let mut panels = Vec::with_capacity(raw.panels.len());
@@ -291,10 +293,13 @@ impl Pattern {
         let chart = match &raw.size_chart {
             Some(rel) => {
                 let path = dir.join(rel);
-                let chart = files.read_text(&path).map_err(|e| e.to_string()).and_then(|text| {
-                    SizeChart::from_ron_str(&text, &path.display().to_string())
-                        .map_err(|e| e.to_string())
-                });
+                let chart = files
+                    .read_text(&path)
+                    .map_err(|e| e.to_string())
+                    .and_then(|text| {
+                        SizeChart::from_ron_str(&text, &path.display().to_string())
+                            .map_err(|e| e.to_string())
+                    });
                 Some(chart.map_err(|e| {
                     problems.at(
                         &["size_chart"],

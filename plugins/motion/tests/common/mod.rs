@@ -18,7 +18,8 @@ pub fn cmu_index() -> Vec<String> {
 
 /// The clean 30 Hz stream of one loop of a clip.
 pub fn clean_frames(file: &str) -> Vec<SensorFrame> {
-    let source = BvhSource::load(fitroom_testdata::clip_path(file), Default::default()).expect(file);
+    let source =
+        BvhSource::load(fitroom_testdata::clip_path(file), Default::default()).expect(file);
     let n = (source.clip_duration_s() * 30.0).floor() as usize;
     (0..=n).map(|k| source.frame_at(k as f64 / 30.0)).collect()
 }

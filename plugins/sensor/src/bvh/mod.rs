@@ -305,4 +305,3 @@ fn read_maybe_gzip(path: &Path) -> std::io::Result<Vec<u8>> {
     flate2::read::GzDecoder::new(bytes.as_slice()).read_to_end(&mut text)?;
     Ok(text)
 }
-
