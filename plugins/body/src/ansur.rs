@@ -19,6 +19,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use fitroom_math::stats::percentile;
 use serde::Serialize;
 
 use crate::fit::{FitOptions, FitReport, FitRequest, fit};
@@ -106,8 +107,11 @@ pub fn read_ansur(path: &Path, female: bool) -> Result<Vec<AnsurSubject>, AnsurE
     let mut bytes = std::fs::read(path).map_err(io)?;
     if bytes.starts_with(&[0x1f, 0x8b]) {
         let mut text = Vec::with_capacity(bytes.len() * 5);
-        std::io::Read::read_to_end(&mut flate2::read::GzDecoder::new(bytes.as_slice()), &mut text)
-            .map_err(io)?;
+        std::io::Read::read_to_end(
+            &mut flate2::read::GzDecoder::new(bytes.as_slice()),
+            &mut text,
+        )
+        .map_err(io)?;
         bytes = text;
     }
     // Latin-1 to UTF-8: every byte is its own code point.
@@ -241,14 +245,6 @@ pub struct AnsurReport {
     pub mean_fit_ms: f64,
     pub max_fit_ms: f64,
     pub fits: Vec<SubjectFit>,
-}
-
-fn percentile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
-    sorted[i.min(sorted.len() - 1)]
 }
 
 /// Fits every subject on `threads` worker threads (the result does not depend on their
