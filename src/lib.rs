@@ -5,13 +5,11 @@
 #![forbid(unsafe_code)]
 
 pub mod assets;
-pub mod body_cli;
 pub mod body_panel;
-pub mod cloth_cli;
+pub mod cli;
 pub mod design;
 pub mod headless;
 pub mod kiosk;
-pub mod motion_cli;
 pub mod timing;
 
 use std::{path::PathBuf, sync::Arc, time::Duration};
@@ -94,9 +92,10 @@ impl AppOptions {
     pub fn with_config(mode: Mode, config_path: &std::path::Path) -> Result<Self> {
         let assets = assets::assets_dir()?;
         let config = kiosk::config::KioskConfig::load(config_path)?;
-        let motion = config
-            .sensor_clip()
-            .map_or_else(|| assets.join(assets::DEFAULT_MOTION), |clip| assets.join(clip));
+        let motion = config.sensor_clip().map_or_else(
+            || assets.join(assets::DEFAULT_MOTION),
+            |clip| assets.join(clip),
+        );
         Ok(Self {
             mode,
             body: assets.join(assets::DEFAULT_BODY),
@@ -252,9 +251,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
                 config_path: options.config_path.clone(),
             },
             timing::TimingPlugin,
-            GarmentPlugin {
-                root: garment_root,
-            },
+            GarmentPlugin { root: garment_root },
         ))
         .insert_resource(GarmentRequest {
             path: options.garment.clone(),
@@ -315,7 +312,12 @@ fn garment_root(options: &AppOptions) -> Result<PathBuf> {
         .parent()
         .and_then(|dir| dir.parent())
         .map(PathBuf::from)
-        .with_context(|| format!("the garment '{}' has no folder above its own", garment.display()))
+        .with_context(|| {
+            format!(
+                "the garment '{}' has no folder above its own",
+                garment.display()
+            )
+        })
 }
 
 /// How long loading the inputs took.
