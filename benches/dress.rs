@@ -18,10 +18,11 @@ use std::path::Path;
 use std::time::Duration;
 
 use criterion::{BenchmarkId, Criterion, criterion_group, criterion_main};
-use fitroom::cloth_cli::{STEP_HZ, Walk, dress_4k, garment_on_walk};
+use fitroom::cli::cloth::{dress_4k, garment_on_walk};
 use fitroom_body::BodyModel;
 use fitroom_cloth::{ClothSolver, Fabric, SolverSettings};
 use fitroom_garment::GarmentMesh;
+use fitroom_motion::walk::{STEP_HZ, Walk};
 use glam::Affine3A;
 
 const DT: f32 = 1.0 / STEP_HZ;

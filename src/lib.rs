@@ -5,13 +5,11 @@
 #![forbid(unsafe_code)]
 
 pub mod assets;
-pub mod body_cli;
 pub mod body_panel;
-pub mod cloth_cli;
+pub mod cli;
 pub mod design;
 pub mod headless;
 pub mod kiosk;
-pub mod motion_cli;
 pub mod timing;
 
 use std::{path::PathBuf, sync::Arc, time::Duration};

@@ -91,22 +91,13 @@ impl StageTimings {
     }
 }
 
-/// Mean and nearest-rank 95th percentile.
+/// Mean and 95th percentile ([`fitroom_math::stats::percentile`]'s rule).
 pub fn summarize(samples: &[f64]) -> StageSummary {
-    if samples.is_empty() {
-        return StageSummary {
-            mean_ms: 0.0,
-            p95_ms: 0.0,
-            samples: 0,
-        };
-    }
-    let mut sorted = samples.to_vec();
-    sorted.sort_by(f64::total_cmp);
-    let rank = ((0.95 * sorted.len() as f64).ceil() as usize).clamp(1, sorted.len());
+    let s = fitroom_math::stats::Summary::of(samples);
     StageSummary {
-        mean_ms: sorted.iter().sum::<f64>() / sorted.len() as f64,
-        p95_ms: sorted[rank - 1],
-        samples: sorted.len(),
+        mean_ms: s.mean,
+        p95_ms: s.p95,
+        samples: s.samples,
     }
 }
 
@@ -150,19 +141,5 @@ impl Plugin for TimingPlugin {
             }
             app.add_systems(PostUpdate, (start, stop));
         }
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn percentile_is_nearest_rank() {
-        let samples: Vec<f64> = (1..=100).map(f64::from).collect();
-        let s = summarize(&samples);
-        assert_eq!(s.p95_ms, 95.0);
-        assert!((s.mean_ms - 50.5).abs() < 1e-12);
-        assert_eq!(summarize(&[3.0]).p95_ms, 3.0);
     }
 }

@@ -239,7 +239,7 @@ fn bad_fit_requests_fail_with_the_field_and_range() {
         .output()
         .expect("runs");
     assert!(!out.status.success());
-    assert!(String::from_utf8_lossy(&out.stderr).contains("female or male"));
+    assert!(String::from_utf8_lossy(&out.stderr).contains("[possible values: female, male]"));
 }
 
 #[test]

@@ -3,7 +3,7 @@
 //! and tubes of 1k-64k particles. Only what the report holds is asserted here (particle
 //! counts, health); its timings are figures to read, not to assert.
 
-use fitroom::cloth_cli::{DRESS_PARTICLES, bench};
+use fitroom::cli::cloth::{DRESS_PARTICLES, bench};
 
 /// Motion frames walked: past the embedded clip's end (119 frames).
 const FRAMES: usize = 130;

@@ -10,10 +10,11 @@
 //! (`fitroom_garment::sim`), so here they also sweep through its bodice and skirt.
 //! Penetration is measured against the colliders a garment keeps, as the solver meets them.
 
-use fitroom::cloth_cli::{STEP_HZ, load_garment};
+use fitroom::cli::cloth::load_garment;
 use fitroom_body::{BodyModel, Shape};
 use fitroom_cloth::SolverSettings;
 use fitroom_garment::sim::{GarmentSim, SimGarment};
+use fitroom_motion::walk::STEP_HZ;
 use glam::{Affine3A, Quat, Vec3};
 
 fn model() -> BodyModel {

@@ -43,7 +43,7 @@ fn garments_survive_ten_thousand_frames_of_walking() {
     ] {
         for (clip, frames_120) in &clips_for {
             let frames = (frames_120 * loops).div_ceil(4) + 1;
-            let (r, _, _) = fitroom::cloth_cli::sim(
+            let (r, _, _) = fitroom::cli::cloth::sim(
                 &model,
                 &fitroom_body::Shape::default(),
                 &garments.join(garment),

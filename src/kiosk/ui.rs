@@ -22,6 +22,7 @@ impl Plugin for OverlayPlugin {
     }
 }
 
+// A Bevy system: each parameter is a resource it reads.
 #[allow(clippy::too_many_arguments)]
 fn status_overlay(
     mut contexts: EguiContexts,

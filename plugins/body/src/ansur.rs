@@ -19,6 +19,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
+use fitroom_math::stats::percentile;
 use serde::Serialize;
 
 use crate::fit::{FitOptions, FitReport, FitRequest, fit};
@@ -244,14 +245,6 @@ pub struct AnsurReport {
     pub mean_fit_ms: f64,
     pub max_fit_ms: f64,
     pub fits: Vec<SubjectFit>,
-}
-
-fn percentile(sorted: &[f64], q: f64) -> f64 {
-    if sorted.is_empty() {
-        return f64::NAN;
-    }
-    let i = ((sorted.len() - 1) as f64 * q).round() as usize;
-    sorted[i.min(sorted.len() - 1)]
 }
 
 /// Fits every subject on `threads` worker threads (the result does not depend on their

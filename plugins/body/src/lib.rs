@@ -82,6 +82,7 @@ pub mod ansur;
 pub mod asset;
 mod codec;
 pub mod colliders;
+pub mod export;
 pub mod fit;
 pub mod forearm;
 pub mod import;

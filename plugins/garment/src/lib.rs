@@ -55,6 +55,7 @@ pub mod asset;
 pub mod binding;
 pub mod body;
 pub mod cover;
+pub mod ease;
 pub mod error;
 pub mod fabric;
 pub mod files;

@@ -18,6 +18,7 @@ pub mod pipeline;
 pub mod retarget;
 pub mod smoothing;
 pub mod still_pose;
+pub mod walk;
 
 #[cfg(feature = "plugin")]
 pub mod plugin;

@@ -3,7 +3,7 @@
 
 use std::path::Path;
 
-use glam::Vec3;
+use fitroom_body::export;
 
 use crate::error::GarmentError;
 use crate::garment::GarmentMesh;
@@ -32,19 +32,9 @@ pub fn glb_bytes(garment: &GarmentMesh, channel: AttachChannel) -> Vec<u8> {
         views.push((bin.len(), bytes.len()));
         bin.extend_from_slice(&bytes);
     };
-    let pos: Vec<u8> = garment
-        .positions
-        .iter()
-        .flat_map(|p| p.to_array())
-        .flat_map(f32::to_le_bytes)
-        .collect();
+    let pos = export::vec3_bytes(&garment.positions);
     push(&mut bin, pos);
-    let idx: Vec<u8> = garment
-        .triangles
-        .iter()
-        .flatten()
-        .flat_map(|v| v.to_le_bytes())
-        .collect();
+    let idx = export::index_bytes(&garment.triangles);
     push(&mut bin, idx);
     let weight = |v: usize| {
         if garment.skinned.get(v).copied().unwrap_or(false) {
@@ -63,10 +53,7 @@ pub fn glb_bytes(garment: &GarmentMesh, channel: AttachChannel) -> Vec<u8> {
     while !bin.len().is_multiple_of(4) {
         bin.push(0);
     }
-    let (lo, hi) = garment.positions.iter().fold(
-        (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-        |(lo, hi), &p| (lo.min(p), hi.max(p)),
-    );
+    let (lo, hi) = export::bounds(&garment.positions);
     let mut attributes = vec!["\"POSITION\":0".to_owned()];
     if matches!(channel, AttachChannel::Color0 | AttachChannel::Both) {
         attributes.push("\"COLOR_0\":2".to_owned());
@@ -105,22 +92,7 @@ pub fn glb_bytes(garment: &GarmentMesh, channel: AttachChannel) -> Vec<u8> {
         h1 = hi.y,
         h2 = hi.z,
     );
-    let mut json = json.into_bytes();
-    while !json.len().is_multiple_of(4) {
-        json.push(b' ');
-    }
-    let total = 12 + 8 + json.len() + 8 + bin.len();
-    let mut out = Vec::with_capacity(total);
-    out.extend_from_slice(b"glTF");
-    out.extend_from_slice(&2u32.to_le_bytes());
-    out.extend_from_slice(&(total as u32).to_le_bytes());
-    out.extend_from_slice(&(json.len() as u32).to_le_bytes());
-    out.extend_from_slice(&0x4E4F_534Au32.to_le_bytes());
-    out.extend_from_slice(&json);
-    out.extend_from_slice(&(bin.len() as u32).to_le_bytes());
-    out.extend_from_slice(&0x004E_4942u32.to_le_bytes());
-    out.extend_from_slice(&bin);
-    out
+    export::glb(json.into_bytes(), bin)
 }
 
 /// Writes [`glb_bytes`] to `path`.

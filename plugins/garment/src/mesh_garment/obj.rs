@@ -6,6 +6,7 @@ use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::Path;
 
+use fitroom_body::export;
 use glam::{Vec2, Vec3};
 
 use crate::body::BodySurface;
@@ -213,17 +214,13 @@ pub fn write_obj(garment: &GarmentMesh, path: impl AsRef<Path>) -> Result<(), Ga
     );
     let _ = writeln!(obj, "mtllib {mtl_name}");
     let _ = writeln!(obj, "o {}", garment.name.replace(char::is_whitespace, "_"));
-    for p in &garment.positions {
-        let _ = writeln!(obj, "v {:.5} {:.5} {:.5}", p.x, p.y, p.z);
-    }
+    export::obj_vertices(&mut obj, &garment.positions, 5);
     let mut mtl_text = String::from(
         "# materials of a fitroom garment: the suffix `Free` marks the simulated part\n",
     );
     for (name, list) in &groups {
         let _ = writeln!(obj, "usemtl {name}");
-        for t in list {
-            let _ = writeln!(obj, "f {} {} {}", t[0] + 1, t[1] + 1, t[2] + 1);
-        }
+        export::obj_faces(&mut obj, list, false);
         let colour = if name.ends_with(FREE_SUFFIX) {
             "0.80 0.30 0.20"
         } else {
