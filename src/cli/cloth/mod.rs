@@ -246,6 +246,9 @@ pub struct SimReport {
     /// Body teleports (the clip looping) the garment was carried across.
     pub teleports: u32,
     pub all_finite: bool,
+    /// FNV-1a hash of the bits of every particle position after the last step, in hex: two
+    /// builds that simulate the same bit for bit give the same checksum.
+    pub checksum: String,
 }
 
 /// `fitroom cloth sim`: the garment put on the body at the clip's first frame, then stepped
@@ -359,8 +362,22 @@ pub(crate) fn sim_mesh(
         first_blow_up,
         teleports: sim.teleports(),
         all_finite,
+        checksum: positions_checksum(&sim.positions()),
     };
     Ok((report, sim, last_skin))
+}
+
+/// FNV-1a (64 bit) over the little-endian bits of every coordinate, in hex.
+fn positions_checksum(positions: &[glam::Vec3]) -> String {
+    let mut hash: u64 = 0xcbf2_9ce4_8422_2325;
+    for p in positions {
+        for v in [p.x, p.y, p.z] {
+            for b in v.to_bits().to_le_bytes() {
+                hash = (hash ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3);
+            }
+        }
+    }
+    format!("{hash:016x}")
 }
 
 fn print_sim(r: &SimReport) {
