@@ -163,6 +163,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     // registered before the `AssetPlugin` comes with the default plugins.
     let garment_root = garment_root(options)?;
     fitroom_garment::asset::register_garment_source(&mut app, &garment_root);
+    kiosk::config::register_config_source(&mut app, &options.config_path);
     // Bevy's asset server reads the product's assets folder (the kiosk configuration).
     let asset_plugin = AssetPlugin {
         file_path: assets::assets_dir()?.to_string_lossy().into_owned(),

@@ -19,6 +19,31 @@ use super::KioskTimings;
 /// The file the kiosk reads by default, relative to `assets/`.
 pub const DEFAULT_CONFIG: &str = "kiosk.ron";
 
+/// The asset source the configuration is followed through: the configuration file's folder.
+pub const CONFIG_SOURCE: &str = "kiosk";
+
+/// The folder of a configuration file and its name in it.
+pub fn config_location(config: &Path) -> (PathBuf, PathBuf) {
+    let absolute = std::path::absolute(config).unwrap_or_else(|_| config.to_owned());
+    let dir = absolute
+        .parent()
+        .map_or_else(|| PathBuf::from("."), Path::to_path_buf);
+    let file = absolute
+        .file_name()
+        .map_or_else(|| PathBuf::from(DEFAULT_CONFIG), PathBuf::from);
+    (dir, file)
+}
+
+/// Names the configuration file's folder as the asset source [`CONFIG_SOURCE`]; call before
+/// adding the `AssetPlugin`.
+pub fn register_config_source(app: &mut App, config: &Path) {
+    let (dir, _) = config_location(config);
+    app.register_asset_source(
+        CONFIG_SOURCE,
+        bevy::asset::io::AssetSourceBuilder::platform_default(&dir.to_string_lossy(), None),
+    );
+}
+
 /// What the kiosk shows and how it behaves.
 #[derive(Asset, TypePath, Debug, Clone, PartialEq, Deserialize)]
 #[serde(rename = "KioskConfig", deny_unknown_fields)]

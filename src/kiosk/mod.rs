@@ -125,7 +125,8 @@ pub enum KioskSystems {
 }
 
 /// The kiosk flow, the camera, and the configuration file (`config`, read from
-/// `config_path`; followed for edits when it lies in the assets folder).
+/// `config_path`, then followed for edits through the asset source [`config::CONFIG_SOURCE`],
+/// which the app registers on the file's folder with [`config::register_config_source`]).
 pub struct KioskPlugin {
     pub config: config::KioskConfig,
     pub config_path: std::path::PathBuf,
@@ -134,26 +135,13 @@ pub struct KioskPlugin {
 impl Plugin for KioskPlugin {
     fn build(&self, app: &mut App) {
         fitroom_schedule::ensure(app);
-        let assets = crate::assets::assets_dir().ok();
-        let watched = assets.as_ref().and_then(|a| {
-            let a = std::path::absolute(a).ok()?;
-            let file = std::path::absolute(&self.config_path).ok()?;
-            file.strip_prefix(&a)
-                .ok()
-                .map(|p| (a.clone(), p.to_owned()))
-        });
         let mut active = config::ActiveKioskConfig {
             config: self.config.clone(),
             handle: None,
             error: None,
         };
-        let has_assets = app.world().contains_resource::<AssetServer>();
-        if has_assets {
-            let root = watched
-                .as_ref()
-                .map(|(root, _)| root.clone())
-                .or(assets)
-                .unwrap_or_default();
+        if app.world().contains_resource::<AssetServer>() {
+            let (root, file) = config::config_location(&self.config_path);
             app.init_asset::<config::KioskConfig>()
                 .register_asset_loader(config::KioskConfigLoader { root })
                 .add_systems(
@@ -162,9 +150,9 @@ impl Plugin for KioskPlugin {
                         .in_set(KioskSystems::Flow)
                         .before(track_person),
                 );
-            if let Some((_, relative)) = watched {
-                active.handle = Some(app.world().resource::<AssetServer>().load(relative));
-            }
+            let path =
+                bevy::asset::AssetPath::from_path_buf(file).with_source(config::CONFIG_SOURCE);
+            active.handle = Some(app.world().resource::<AssetServer>().load(path));
         }
         app.init_state::<KioskState>()
             .insert_resource(self.config.kiosk_timings())
