@@ -7,7 +7,8 @@ use clap::Subcommand;
 
 #[derive(Subcommand)]
 pub enum ImportCommand {
-    /// MakeHuman data folder (e.g. ../shared/data/makehuman) to a .fitbody asset.
+    /// MakeHuman data folder (the MPFB2 asset layout: `3dobjs/`, `targets/`, `rigs/`) to a
+    /// .fitbody asset.
     Makehuman {
         dir: PathBuf,
         #[arg(long, default_value = "assets/bodies/makehuman.fitbody")]
