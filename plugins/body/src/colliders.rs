@@ -361,29 +361,4 @@ impl BodyColliders {
     }
 }
 
-/// Signed distance from `p` to a round cone (exact; Quilez's formula).
-pub fn round_cone_distance(p: Vec3, a: Vec3, b: Vec3, r1: f32, r2: f32) -> f32 {
-    let ba = b - a;
-    let l2 = ba.length_squared();
-    if l2 < 1e-12 {
-        return p.distance(a) - r1.max(r2);
-    }
-    let rr = r1 - r2;
-    let a2 = l2 - rr * rr;
-    let il2 = 1.0 / l2;
-    let pa = p - a;
-    let y = pa.dot(ba);
-    let z = y - l2;
-    let x = pa * l2 - ba * y;
-    let x2 = x.length_squared();
-    let y2 = y * y * l2;
-    let z2 = z * z * l2;
-    let k = rr.signum() * rr * rr * x2;
-    if z.signum() * a2 * z2 > k {
-        return (x2 + z2).sqrt() * il2 - r2;
-    }
-    if y.signum() * a2 * y2 < k {
-        return (x2 + y2).sqrt() * il2 - r1;
-    }
-    ((x2 * a2 * il2).sqrt() + y * rr) * il2 - r1
-}
+pub use fitroom_math::round_cone_distance;

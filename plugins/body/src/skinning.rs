@@ -9,71 +9,10 @@
 //! `v' = sum_i w_i * G_i * R_i^-1 * v`, with `R_i` the rest and `G_i` the posed global transform.
 
 use glam::{Affine3A, Mat3A, Quat, Vec3, Vec3A};
-use serde::{Deserialize, Serialize};
 
 use crate::model::{BodyModel, Bone, RestPose};
 
-/// A rotation followed by a translation (no scale): `p -> rotation * p + translation`.
-#[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
-pub struct RigidTransform {
-    pub rotation: Quat,
-    pub translation: Vec3,
-}
-
-impl Default for RigidTransform {
-    fn default() -> Self {
-        Self::IDENTITY
-    }
-}
-
-impl RigidTransform {
-    pub const IDENTITY: Self = Self {
-        rotation: Quat::IDENTITY,
-        translation: Vec3::ZERO,
-    };
-
-    pub fn new(rotation: Quat, translation: Vec3) -> Self {
-        Self {
-            rotation,
-            translation,
-        }
-    }
-
-    pub fn transform_point(&self, p: Vec3) -> Vec3 {
-        self.rotation * p + self.translation
-    }
-
-    pub fn transform_vector(&self, v: Vec3) -> Vec3 {
-        self.rotation * v
-    }
-
-    /// `self * other`: apply `other` first.
-    pub fn mul_transform(&self, other: &Self) -> Self {
-        Self {
-            rotation: (self.rotation * other.rotation).normalize(),
-            translation: self.transform_point(other.translation),
-        }
-    }
-
-    pub fn inverse(&self) -> Self {
-        let r = self.rotation.inverse();
-        Self {
-            rotation: r,
-            translation: -(r * self.translation),
-        }
-    }
-
-    pub fn to_affine(&self) -> Affine3A {
-        Affine3A::from_rotation_translation(self.rotation, self.translation)
-    }
-}
-
-impl core::ops::Mul for RigidTransform {
-    type Output = RigidTransform;
-    fn mul(self, rhs: Self) -> Self {
-        self.mul_transform(&rhs)
-    }
-}
+pub use fitroom_math::RigidTransform;
 
 impl RestPose {
     /// Rest global transform of every bone: its frame at its head.

@@ -4,7 +4,7 @@
 
 mod common;
 
-use fitroom_body::colliders::{BodyColliders, ColliderOptions, round_cone_distance};
+use fitroom_body::colliders::{BodyColliders, ColliderOptions};
 use fitroom_body::{BodyModel, Shape};
 use glam::{Affine3A, Quat, Vec3};
 
@@ -149,49 +149,6 @@ fn posed_colliders_move_rigidly_with_their_bones() {
         assert!((a.distance(*b) - cap.a.distance(cap.b)).abs() < 1e-5);
         assert_eq!((*ra, *rb), (cap.radius_a, cap.radius_b));
     }
-}
-
-#[test]
-fn round_cone_distance_agrees_with_sampled_spheres() {
-    // A round cone is the convex hull of its two end spheres; sample it densely as spheres
-    // along the axis with interpolated radii (a subset of the hull) plus the hull's tangent
-    // cone: compare outside points, where the closed form is exact.
-    let (a, b, r1, r2) = (
-        Vec3::new(0.1, 0.2, 0.0),
-        Vec3::new(0.3, -0.1, 0.2),
-        0.08f32,
-        0.03f32,
-    );
-    let mut worst = 0.0f32;
-    for i in 0..400 {
-        let t = i as f32 * 0.61803;
-        let p =
-            Vec3::new(t.sin() * 0.4, (t * 1.3).cos() * 0.4, (t * 0.7).sin() * 0.4) + (a + b) * 0.5;
-        let exact = round_cone_distance(p, a, b, r1, r2);
-        // Brute force: the hull distance is the max over directions of the support function
-        // difference for outside points; use the sampled tangent spheres instead.
-        let sampled = (0..=2000)
-            .map(|k| {
-                let s = k as f32 / 2000.0;
-                // The hull's spheres: centres shifted along the axis by the taper.
-                let c = a.lerp(b, s);
-                p.distance(c) - (r1 + (r2 - r1) * s)
-            })
-            .fold(f32::INFINITY, f32::min);
-        if exact > 0.02 {
-            // The sphere sweep lies inside the hull: the exact distance is at most the sampled
-            // one, and close to it for a gentle taper.
-            assert!(
-                exact <= sampled + 1e-4,
-                "{p}: exact {exact} sampled {sampled}"
-            );
-            worst = worst.max(sampled - exact);
-        }
-    }
-    assert!(worst < 0.01, "hull vs sphere sweep differ by {worst}");
-    // Inside the axis, the distance is minus the local radius.
-    let mid = round_cone_distance(a, a, b, r1, r2);
-    assert!((mid + r1).abs() < 0.01, "{mid}");
 }
 
 #[test]

@@ -617,6 +617,12 @@ mod tests {
             let p = Vec3::new(rnd(), rnd(), rnd()) * 1.4 + Vec3::new(0.25, 0.05, 0.1);
             let exact = sampled_distance(a, b, 0.12, 0.05, p);
             let d = cone.signed_distance(p);
+            // The workspace's closed form (Quilez), a different derivation: equal everywhere.
+            let closed_form = fitroom_math::round_cone_distance(p, a, b, 0.12, 0.05);
+            assert!(
+                (d - closed_form).abs() < 1e-5,
+                "p {p}: {d} vs {closed_form}"
+            );
             if exact > 0.0 {
                 assert!((d - exact).abs() < 2e-4, "p {p}: {d} vs {exact}");
             } else {

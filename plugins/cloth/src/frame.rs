@@ -27,50 +27,7 @@
 
 use glam::{Quat, Vec3};
 
-/// A rigid pose: local → world is `rotation * x + translation`.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct RigidPose {
-    /// Orientation of the frame.
-    pub rotation: Quat,
-    /// Origin of the frame in world coordinates, metres.
-    pub translation: Vec3,
-}
-
-impl RigidPose {
-    /// The world frame.
-    pub const IDENTITY: Self = Self {
-        rotation: Quat::IDENTITY,
-        translation: Vec3::ZERO,
-    };
-
-    /// A pose from rotation and translation.
-    pub fn new(rotation: Quat, translation: Vec3) -> Self {
-        Self {
-            rotation,
-            translation,
-        }
-    }
-
-    /// Local → world.
-    pub fn transform_point(&self, p: Vec3) -> Vec3 {
-        self.rotation * p + self.translation
-    }
-
-    /// World → local.
-    pub fn inverse_transform_point(&self, p: Vec3) -> Vec3 {
-        self.rotation.inverse() * (p - self.translation)
-    }
-
-    pub(crate) fn is_finite(&self) -> bool {
-        self.rotation.is_finite() && self.translation.is_finite() && self.rotation.length() > 0.5
-    }
-}
-
-impl Default for RigidPose {
-    fn default() -> Self {
-        Self::IDENTITY
-    }
-}
+pub use fitroom_math::RigidTransform;
 
 /// Fractions of the body frame's inertia that the cloth feels (see the module documentation).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -114,26 +71,26 @@ pub(crate) struct FrameMotion {
     pub angular_acceleration: Vec3,
     /// World → local rotation at the end of the step.
     pub to_local: Quat,
-    pub pose: RigidPose,
+    pub pose: RigidTransform,
 }
 
 /// The frame's pose history.
 #[derive(Debug, Clone, Copy, Default)]
 pub(crate) struct FrameState {
     pub enabled: bool,
-    previous: Option<RigidPose>,
-    next: Option<RigidPose>,
+    previous: Option<RigidTransform>,
+    next: Option<RigidTransform>,
     velocity: Vec3,
     angular_velocity: Vec3,
 }
 
 impl FrameState {
-    pub fn set_next(&mut self, pose: RigidPose) {
+    pub fn set_next(&mut self, pose: RigidTransform) {
         self.enabled = true;
         self.next = Some(pose);
     }
 
-    pub fn reset(&mut self, pose: RigidPose) {
+    pub fn reset(&mut self, pose: RigidTransform) {
         self.enabled = true;
         self.previous = Some(pose);
         self.next = Some(pose);

@@ -69,7 +69,7 @@ pub mod wind;
 pub use collision::{MAX_COLLIDERS, Plane, RoundCone, Sphere};
 pub use error::ClothError;
 pub use fabric::Fabric;
-pub use frame::{FrameInertia, RigidPose};
+pub use frame::{FrameInertia, RigidTransform};
 pub use mesh::{ClothMesh, DistanceStencil, MeshTopology, Tether};
 pub use solver::{BlowUp, BlowUpGuard, ClothSolver, Health, SolverSettings, StepReport};
 pub use wind::Wind;

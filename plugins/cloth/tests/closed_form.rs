@@ -5,7 +5,7 @@ mod common;
 
 use common::*;
 use fitroom_cloth::fabric::distance_compliance;
-use fitroom_cloth::{ClothMesh, ClothSolver, Fabric, FrameInertia, RigidPose, SolverSettings};
+use fitroom_cloth::{ClothMesh, ClothSolver, Fabric, FrameInertia, RigidTransform, SolverSettings};
 use glam::{Quat, Vec3};
 
 /// A "swing": one free particle hanging from two pinned points on the x axis by two rods;
@@ -165,12 +165,12 @@ fn a_pendulum_in_an_accelerating_frame_tilts_by_the_felt_acceleration() {
         };
         let mut cloth =
             ClothSolver::new(&mesh, fabric(f32::INFINITY, 3.0), &[0, 1], settings).unwrap();
-        cloth.reset_body_frame(RigidPose::IDENTITY).unwrap();
+        cloth.reset_body_frame(RigidTransform::IDENTITY).unwrap();
         let mut t = 0.0f32;
         for _ in 0..600 {
             t += DT;
             // The body accelerates along +z; the pins are fixed in its frame.
-            let pose = RigidPose::new(Quat::IDENTITY, Vec3::Z * (0.5 * acceleration * t * t));
+            let pose = RigidTransform::new(Quat::IDENTITY, Vec3::Z * (0.5 * acceleration * t * t));
             cloth.set_body_frame(pose).unwrap();
             cloth.step(DT).unwrap();
         }

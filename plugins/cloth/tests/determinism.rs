@@ -7,7 +7,7 @@ mod common;
 
 use common::*;
 use fitroom_cloth::{
-    ClothMesh, ClothSolver, Fabric, Plane, RigidPose, SolverSettings, Sphere, Wind,
+    ClothMesh, ClothSolver, Fabric, Plane, RigidTransform, SolverSettings, Sphere, Wind,
 };
 use glam::{Quat, Vec3};
 
@@ -22,12 +22,12 @@ fn run(threads: usize, (around, rows): (u32, u32)) -> Vec<[u32; 3]> {
     let mut cloth = ClothSolver::new(&mesh, Fabric::silk(), &top, settings).unwrap();
     cloth.set_wind(Some(Wind::new(Vec3::new(2.0, 0.0, 1.0), 1.5, 0.3, 42)));
     cloth.set_planes(&[Plane::floor(0.0)]).unwrap();
-    cloth.reset_body_frame(RigidPose::IDENTITY).unwrap();
+    cloth.reset_body_frame(RigidTransform::IDENTITY).unwrap();
     let rest: Vec<Vec3> = top.iter().map(|&v| mesh.positions()[v as usize]).collect();
     for step in 0..60 {
         let t = step as f32 * DT;
         // The hips sway; the waist ring follows; legs swing inside the skirt.
-        let pose = RigidPose::new(
+        let pose = RigidTransform::new(
             Quat::from_rotation_y(0.5 * t.sin()),
             Vec3::new(0.1 * t, 0.0, 0.0),
         );

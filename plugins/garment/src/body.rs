@@ -6,9 +6,8 @@
 //! Inside and outside are decided by the interpolated vertex normal at the closest surface
 //! point: a point is outside when `(p - closest) · normal > 0`.
 
-use std::collections::HashMap;
-
 use fitroom_body::{BodyModel, Measurements, RestPose, ShapedBody};
+use fitroom_math::CellGrid;
 use glam::Vec3;
 use serde::Deserialize;
 
@@ -121,7 +120,7 @@ pub struct BodySurface {
     pub rest_pose: RestPose,
     /// Bone names, index-aligned with the rest pose.
     pub bone_names: Vec<String>,
-    grid: TriangleGrid,
+    grid: CellGrid,
 }
 
 impl BodySurface {
@@ -148,7 +147,7 @@ impl BodySurface {
             })
             .collect();
         let sole_y = positions.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
-        let grid = TriangleGrid::new(&positions, &model.triangles, 0.03);
+        let grid = triangle_grid(&positions, &model.triangles, 0.03);
         Ok(Self {
             positions,
             normals,
@@ -210,9 +209,8 @@ impl BodySurface {
             None => true,
             Some(r) => r.contains(self.part_of_triangle(t as usize)),
         };
-        let (t, bary, q) = self
-            .grid
-            .nearest(p, &self.positions, &self.triangles, &filter)?;
+        let (t, bary, q) =
+            nearest_triangle(&self.grid, (&self.positions, &self.triangles), p, filter)?;
         let [a, b, c] = self.triangles[t as usize].map(|v| self.normals[v as usize]);
         let n = (a * bary[0] + b * bary[1] + c * bary[2]).normalize_or_zero();
         let n = if n == Vec3::ZERO {
@@ -316,104 +314,31 @@ pub(crate) fn closest_on_triangle(p: Vec3, a: Vec3, b: Vec3, c: Vec3) -> (Vec3, 
     (a + ab * v + ac * w, [1.0 - v - w, v, w])
 }
 
-/// Triangles binned in a uniform grid by their bounding boxes.
-#[derive(Clone, Debug)]
-struct TriangleGrid {
-    origin: Vec3,
-    cell: f32,
-    dims: [i32; 3],
-    cells: HashMap<[i32; 3], Vec<u32>>,
+/// Triangles binned in a uniform grid of `cell`-metre cells by their bounding boxes.
+fn triangle_grid(positions: &[Vec3], triangles: &[[u32; 3]], cell: f32) -> CellGrid {
+    let mut grid = CellGrid::new(cell);
+    for (t, tri) in triangles.iter().enumerate() {
+        let [a, b, c] = tri.map(|v| positions[v as usize]);
+        grid.insert_box(t as u32, a.min(b).min(c), a.max(b).max(c));
+    }
+    grid
 }
 
-impl TriangleGrid {
-    fn new(positions: &[Vec3], triangles: &[[u32; 3]], cell: f32) -> Self {
-        let (lo, hi) = positions.iter().fold(
-            (Vec3::splat(f32::INFINITY), Vec3::splat(f32::NEG_INFINITY)),
-            |(lo, hi), &p| (lo.min(p), hi.max(p)),
-        );
-        let origin = lo - Vec3::splat(cell);
-        let extent = (hi - origin) / cell;
-        let dims = [
-            extent.x.ceil() as i32 + 1,
-            extent.y.ceil() as i32 + 1,
-            extent.z.ceil() as i32 + 1,
-        ];
-        let mut grid = Self {
-            origin,
-            cell,
-            dims,
-            cells: HashMap::new(),
-        };
-        for (t, tri) in triangles.iter().enumerate() {
-            let [a, b, c] = tri.map(|v| positions[v as usize]);
-            let lo = grid.cell_of(a.min(b).min(c));
-            let hi = grid.cell_of(a.max(b).max(c));
-            for x in lo[0]..=hi[0] {
-                for y in lo[1]..=hi[1] {
-                    for z in lo[2]..=hi[2] {
-                        grid.cells.entry([x, y, z]).or_default().push(t as u32);
-                    }
-                }
-            }
-        }
-        grid
-    }
-
-    fn cell_of(&self, p: Vec3) -> [i32; 3] {
-        let c = ((p - self.origin) / self.cell).floor();
-        [c.x as i32, c.y as i32, c.z as i32]
-    }
-
-    /// Nearest triangle passing `filter`: searches shells of cells around the query's cell
-    /// until the best distance found is below the shell's reach.
-    fn nearest(
-        &self,
-        p: Vec3,
-        positions: &[Vec3],
-        triangles: &[[u32; 3]],
-        filter: &dyn Fn(u32) -> bool,
-    ) -> Option<(u32, [f32; 3], Vec3)> {
-        let centre = self.cell_of(p);
-        let mut best: Option<(f32, u32, [f32; 3], Vec3)> = None;
-        let max_r = self.dims.iter().copied().max().unwrap_or(1)
-            + centre.iter().map(|c| c.abs()).max().unwrap_or(0)
-            + 1;
-        for r in 0..=max_r {
-            // Every point of shell r's cells is at least (r - 1) * cell from p.
-            if let Some((d2, ..)) = best
-                && d2.sqrt() < (r as f32 - 1.0) * self.cell
-            {
-                break;
-            }
-            for x in centre[0] - r..=centre[0] + r {
-                for y in centre[1] - r..=centre[1] + r {
-                    for z in centre[2] - r..=centre[2] + r {
-                        let on_shell = (x - centre[0]).abs() == r
-                            || (y - centre[1]).abs() == r
-                            || (z - centre[2]).abs() == r;
-                        if !on_shell {
-                            continue;
-                        }
-                        let Some(list) = self.cells.get(&[x, y, z]) else {
-                            continue;
-                        };
-                        for &t in list {
-                            if !filter(t) {
-                                continue;
-                            }
-                            let [a, b, c] = triangles[t as usize].map(|v| positions[v as usize]);
-                            let (q, bary) = closest_on_triangle(p, a, b, c);
-                            let d2 = p.distance_squared(q);
-                            if best.is_none_or(|(bd, ..)| d2 < bd) {
-                                best = Some((d2, t, bary, q));
-                            }
-                        }
-                    }
-                }
-            }
-        }
-        best.map(|(_, t, bary, q)| (t, bary, q))
-    }
+/// The triangle of `grid` nearest to `p` among those passing `filter`: its index, the
+/// closest point's barycentric coordinates, and the point.
+fn nearest_triangle(
+    grid: &CellGrid,
+    (positions, triangles): (&[Vec3], &[[u32; 3]]),
+    p: Vec3,
+    filter: impl Fn(u32) -> bool,
+) -> Option<(u32, [f32; 3], Vec3)> {
+    let closest = |t: u32| {
+        let [a, b, c] = triangles[t as usize].map(|v| positions[v as usize]);
+        closest_on_triangle(p, a, b, c)
+    };
+    let (t, _) = grid.nearest(p, |t| filter(t).then(|| p.distance_squared(closest(t).0)))?;
+    let (q, bary) = closest(t);
+    Some((t, bary, q))
 }
 
 #[cfg(test)]
@@ -445,15 +370,12 @@ mod tests {
             Vec3::new(1.0, 0.1, 0.0),
         ];
         let triangles = vec![[0, 1, 2], [3, 4, 5]];
-        let grid = TriangleGrid::new(&positions, &triangles, 0.05);
+        let grid = triangle_grid(&positions, &triangles, 0.05);
         let p = Vec3::new(0.02, 0.02, 0.01);
-        let (t, ..) = grid
-            .nearest(p, &positions, &triangles, &|_| true)
-            .expect("found");
+        let mesh = (positions.as_slice(), triangles.as_slice());
+        let (t, ..) = nearest_triangle(&grid, mesh, p, |_| true).expect("found");
         assert_eq!(t, 0);
-        let (t, ..) = grid
-            .nearest(p, &positions, &triangles, &|t| t == 1)
-            .expect("found");
+        let (t, ..) = nearest_triangle(&grid, mesh, p, |t| t == 1).expect("found");
         assert_eq!(t, 1);
     }
 }

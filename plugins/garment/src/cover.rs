@@ -21,7 +21,8 @@ use std::cmp::Ordering;
 use std::collections::{BinaryHeap, HashMap};
 
 use fitroom_body::{BodyModel, MeshGraph, SegmentError};
-use glam::{IVec3, Vec3};
+use fitroom_math::CellGrid;
+use glam::Vec3;
 
 /// Farthest a covering garment vertex lies out from the skin (along its normal), metres.
 pub const COVER_GAP_M: f32 = 0.05;
@@ -80,28 +81,24 @@ fn covered_by(
 ) -> Result<Vec<bool>, SegmentError> {
     let graph = MeshGraph::new(garment.len(), triangles)?;
     let inland = distance_from_edges(garment, triangles, &graph, attached);
-    let mut body_grid: HashMap<IVec3, Vec<u32>> = HashMap::new();
-    for (v, &p) in body.iter().enumerate() {
-        if p.is_finite() {
-            body_grid.entry(key(p)).or_default().push(v as u32);
-        }
-    }
+    let body_grid = CellGrid::of_points(body, COVER_GAP_M);
     // Garment vertices far enough from the edges, with the bone of their nearest body vertex
     // (within the grid's reach), in a grid of COVER_GAP_M cells.
-    let mut grid: HashMap<IVec3, Vec<u32>> = HashMap::new();
+    let mut grid = CellGrid::new(COVER_GAP_M);
     let mut garment_bone = vec![usize::MAX; garment.len()];
     for (g, &q) in garment.iter().enumerate() {
         if inland[g] < COVER_MARGIN_M || !q.is_finite() {
             continue;
         }
-        let nearest = near(&body_grid, q).min_by(|&a, &b| {
+        let nearest = body_grid.around(q, 1).min_by(|&a, &b| {
             body[a as usize]
                 .distance_squared(q)
                 .total_cmp(&body[b as usize].distance_squared(q))
+                .then(a.cmp(&b))
         });
         if let Some(b) = nearest {
             garment_bone[g] = bone_of[b as usize];
-            grid.entry(key(q)).or_default().push(g as u32);
+            grid.insert(g as u32, q);
         }
     }
     Ok(body
@@ -110,7 +107,7 @@ fn covered_by(
         .enumerate()
         .map(|(v, (&p, &n))| {
             p.is_finite()
-                && near(&grid, p).any(|g| {
+                && grid.around(p, 1).any(|g| {
                     let d = garment[g as usize] - p;
                     let out = d.dot(n);
                     (-BEHIND_SKIN_M..=COVER_GAP_M).contains(&out)
@@ -119,21 +116,6 @@ fn covered_by(
                 })
         })
         .collect())
-}
-
-/// The entries of `grid` (cells of [`COVER_GAP_M`]) in the 27 cells around `p`'s.
-fn near(grid: &HashMap<IVec3, Vec<u32>>, p: Vec3) -> impl Iterator<Item = u32> + '_ {
-    let c = key(p);
-    (-1..=1)
-        .flat_map(move |x| (-1..=1).flat_map(move |y| (-1..=1).map(move |z| (x, y, z))))
-        .filter_map(move |(x, y, z)| grid.get(&(c + IVec3::new(x, y, z))))
-        .flatten()
-        .copied()
-}
-
-/// The grid cell of `p`.
-fn key(p: Vec3) -> IVec3 {
-    (p / COVER_GAP_M).floor().as_ivec3()
 }
 
 /// Per garment vertex: its distance along the mesh's edges from the nearest vertex on an open

@@ -1,5 +1,13 @@
-//! Small Bevy-free numerics shared by fitroom's crates and its CLI.
+//! Small Bevy-free numerics shared by fitroom's crates and its CLI: summary statistics, the
+//! rigid transform, the round-cone distance and the spatial grid. Each is defined here once.
 
 #![forbid(unsafe_code)]
 
+pub mod geometry;
+pub mod grid;
+pub mod rigid;
 pub mod stats;
+
+pub use geometry::round_cone_distance;
+pub use grid::CellGrid;
+pub use rigid::RigidTransform;

@@ -5,7 +5,7 @@
 use glam::{Vec3, Vec3A};
 
 use super::step::StepContext;
-use crate::frame::RigidPose;
+use crate::frame::RigidTransform;
 use crate::simd::{Isa, LANES, Lanes, V3, dispatch_lanes, offset};
 use crate::wind::triangle_force_lanes;
 
@@ -104,7 +104,7 @@ pub(super) unsafe fn aero_with<L: Lanes>(context: &StepContext<'_>, t: usize, co
         if let Some(wind) = context.wind {
             let (pose, to_local) = match &k.frame {
                 Some(f) => (f.motion.pose, f.motion.to_local),
-                None => (RigidPose::IDENTITY, glam::Quat::IDENTITY),
+                None => (RigidTransform::IDENTITY, glam::Quat::IDENTITY),
             };
             let c = centroid.to_arrays();
             let mut air = [[0.0f32; LANES]; 3];

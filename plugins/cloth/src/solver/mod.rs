@@ -83,7 +83,7 @@ use crate::collision::{MAX_COLLIDERS, Plane, Sphere, SweptCollider};
 use crate::constraints::BendTarget;
 use crate::error::ClothError;
 use crate::fabric::Fabric;
-use crate::frame::{FrameState, RigidPose};
+use crate::frame::{FrameState, RigidTransform};
 use crate::mesh::ClothMesh;
 use crate::pool::{PhaseCounters, WorkerPool};
 use crate::simd::{Isa, LANES};
@@ -421,7 +421,7 @@ impl ClothSolver {
 
     /// Gives the body frame's pose at the end of the next step: from now on the simulation
     /// runs in this frame (see [`crate::frame`]). The first pose given starts at rest.
-    pub fn set_body_frame(&mut self, pose: RigidPose) -> Result<(), ClothError> {
+    pub fn set_body_frame(&mut self, pose: RigidTransform) -> Result<(), ClothError> {
         if !pose.is_finite() {
             return Err(ClothError::NonFiniteInput {
                 what: "body frame pose",
@@ -434,7 +434,7 @@ impl ClothSolver {
 
     /// Puts the body frame at `pose` with zero velocity (after a tracking jump), so that the
     /// jump is not felt as inertia.
-    pub fn reset_body_frame(&mut self, pose: RigidPose) -> Result<(), ClothError> {
+    pub fn reset_body_frame(&mut self, pose: RigidTransform) -> Result<(), ClothError> {
         if !pose.is_finite() {
             return Err(ClothError::NonFiniteInput {
                 what: "body frame pose",

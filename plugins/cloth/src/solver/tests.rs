@@ -641,7 +641,7 @@ fn eight_particles_integrate_as_one_does_in_a_moving_frame() {
         angular_velocity: Vec3::new(0.2, 3.0, -0.5),
         angular_acceleration: Vec3::new(-4.0, 12.0, 1.0),
         to_local: glam::Quat::from_rotation_y(0.4),
-        pose: RigidPose::IDENTITY,
+        pose: RigidTransform::IDENTITY,
     };
     let inertia = FrameInertia::FULL;
     let h = 1.0 / 1200.0;

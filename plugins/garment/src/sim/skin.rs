@@ -71,56 +71,15 @@ pub(super) fn smooth_skin(
         .collect()
 }
 
-/// Index of the nearest point of `points` for each of `queries` (a uniform grid of 3 cm cells;
-/// falls back to a full search where the neighbourhood is empty).
+/// Index of the nearest point of `points` for each of `queries` (exact, through a grid of
+/// 3 cm cells; 0 for a query that is not finite or when there are no points).
 pub(super) fn nearest(points: &[Vec3], queries: &[Vec3]) -> Vec<usize> {
-    use std::collections::HashMap;
-    let cell = 0.03f32;
-    let key = |p: Vec3| {
-        (
-            (p.x / cell).floor() as i32,
-            (p.y / cell).floor() as i32,
-            (p.z / cell).floor() as i32,
-        )
-    };
-    let mut grid: HashMap<(i32, i32, i32), Vec<usize>> = HashMap::new();
-    for (i, &p) in points.iter().enumerate() {
-        grid.entry(key(p)).or_default().push(i);
-    }
+    let grid = fitroom_math::CellGrid::of_points(points, 0.03);
     queries
         .iter()
         .map(|&q| {
-            let (x, y, z) = key(q);
-            let mut best: Option<(f32, usize)> = None;
-            for r in 1..=4 {
-                for dx in -r..=r {
-                    for dy in -r..=r {
-                        for dz in -r..=r {
-                            if let Some(list) = grid.get(&(x + dx, y + dy, z + dz)) {
-                                for &i in list {
-                                    let d = points[i].distance_squared(q);
-                                    if best.is_none_or(|b| d < b.0) {
-                                        best = Some((d, i));
-                                    }
-                                }
-                            }
-                        }
-                    }
-                }
-                // Anything found within r cells is exact once r cells cover its distance.
-                if let Some((d, _)) = best
-                    && d.sqrt() <= (r as f32 - 1.0) * cell
-                {
-                    break;
-                }
-            }
-            best.map(|b| b.1).unwrap_or_else(|| {
-                points
-                    .iter()
-                    .enumerate()
-                    .min_by(|a, b| a.1.distance_squared(q).total_cmp(&b.1.distance_squared(q)))
-                    .map_or(0, |(i, _)| i)
-            })
+            grid.nearest(q, |i| Some(points[i as usize].distance_squared(q)))
+                .map_or(0, |(i, _)| i as usize)
         })
         .collect()
 }
