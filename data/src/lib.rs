@@ -15,8 +15,19 @@ use std::io::Read;
 use std::path::{Path, PathBuf};
 
 /// The folder of this crate, which holds the data.
+///
+/// Found at run time first: `cargo test` and `cargo bench` set `CARGO_MANIFEST_DIR` to the
+/// package they run, inside this workspace, so its nearest ancestor holding `data/` is this
+/// checkout's. The path compiled in is the fallback only: a build cache shared by two
+/// checkouts reuses this crate compiled in either of them.
 pub fn data_dir() -> PathBuf {
-    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+    let this_checkout = std::env::var_os("CARGO_MANIFEST_DIR").and_then(|dir| {
+        Path::new(&dir)
+            .ancestors()
+            .map(|a| a.join("data"))
+            .find(|d| d.join("mocap/cmu/INDEX.tsv").is_file())
+    });
+    this_checkout.unwrap_or_else(|| PathBuf::from(env!("CARGO_MANIFEST_DIR")))
 }
 
 /// The CMU clips and their index.
