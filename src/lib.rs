@@ -30,8 +30,7 @@ use fitroom_body::{
 use fitroom_garment::plugin::{ClothSettings, GarmentPlugin, GarmentRequest};
 use fitroom_motion::{
     AvatarPipeline, MotionPipeline,
-    filter::FilterKind,
-    plugin::{AvatarMotion, MotionPlugin},
+    plugin::{AvatarMotion, FilterSettings, MotionPlugin},
 };
 use fitroom_sensor::{
     SensorSource,
@@ -146,7 +145,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     let floor_y = -source.options().sensor_height_m;
     let motion = AvatarMotion::new(MotionPipeline::new(
         AvatarPipeline::new(&skeleton, floor_y)?,
-        FilterKind::default().build(),
+        FilterSettings::default().filter.build(),
     ));
 
     let source_height = source.options().sensor_height_m;
@@ -164,6 +163,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     let garment_root = garment_root(options)?;
     fitroom_garment::asset::register_garment_source(&mut app, &garment_root);
     kiosk::config::register_config_source(&mut app, &options.config_path);
+    fitroom_body::reload::register_body_source(&mut app, &options.body);
     // Bevy's asset server reads the product's assets folder (the kiosk configuration).
     let asset_plugin = AssetPlugin {
         file_path: assets::assets_dir()?.to_string_lossy().into_owned(),
@@ -254,6 +254,9 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             timing::TimingPlugin,
             GarmentPlugin { root: garment_root },
         ))
+        .add_plugins(fitroom_body::reload::BodyFilePlugin {
+            file: options.body.clone(),
+        })
         .insert_resource(GarmentRequest {
             path: options.garment.clone(),
             size: options.garment_size.clone(),

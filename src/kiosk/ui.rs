@@ -33,6 +33,7 @@ fn status_overlay(
     motion: Option<Res<AvatarMotion>>,
     garment: Option<Res<GarmentStatus>>,
     config: Option<Res<super::config::ActiveKioskConfig>>,
+    body_file: Option<Res<fitroom_body::reload::BodyFile>>,
     debug: Res<super::DebugSkeletons>,
 ) -> Result {
     let fps = diagnostics
@@ -80,7 +81,11 @@ fn status_overlay(
                 if let Some(error) = &feed.error {
                     ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);
                 }
-                if let Some(error) = config.as_ref().and_then(|c| c.error.as_ref()) {
+                let errors = [
+                    config.as_ref().and_then(|c| c.error.as_ref()),
+                    body_file.as_ref().and_then(|b| b.error.as_ref()),
+                ];
+                for error in errors.into_iter().flatten() {
                     ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);
                 }
                 if let Some(garment) = garment.as_ref() {

@@ -91,6 +91,8 @@ pub mod model;
 pub mod modifiers;
 #[cfg(feature = "plugin")]
 pub mod plugin;
+#[cfg(feature = "plugin")]
+pub mod reload;
 pub mod rig;
 pub mod segments;
 pub mod sizing;

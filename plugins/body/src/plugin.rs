@@ -65,6 +65,8 @@ impl AvatarBody {
 /// Systems of the body plugin.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 pub enum BodySystems {
+    /// Follows an edited body file ([`crate::reload`]; before the reshape it triggers).
+    Load,
     /// Applies a changed [`AvatarShape`] (then [`AvatarBody`] has changed too).
     Reshape,
     /// Leaves the skin a garment covers out of the drawn mesh ([`HiddenSkin`]).
@@ -154,7 +156,11 @@ impl Plugin for BodyPlugin {
         .add_systems(Startup, (spawn_avatar, measure_avatar))
         .configure_sets(
             PostUpdate,
-            (BodySystems::Reshape, BodySystems::HideCoveredSkin)
+            (
+                BodySystems::Load,
+                BodySystems::Reshape,
+                BodySystems::HideCoveredSkin,
+            )
                 .chain()
                 .in_set(FitroomSystems::Pose),
         )
