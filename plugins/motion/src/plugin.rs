@@ -8,6 +8,7 @@ use fitroom_body::plugin::{AvatarBody, AvatarJoint, BodySystems, SensorPlacement
 use fitroom_schedule::FitroomSystems;
 use fitroom_sensor::{SensorFrame, plugin::SensorFeed};
 
+use crate::filter::FilterKind;
 use crate::{AvatarPipeline, AvatarPose, MotionPipeline, MotionStep};
 
 /// Systems of the motion plugin, in order.
@@ -70,6 +71,14 @@ impl AvatarMotion {
     }
 }
 
+/// The joint filter the avatar's pipeline runs (live-editable: a change replaces the filter,
+/// which starts afresh on the next frame).
+#[derive(Resource, Debug, Clone, Copy, Default, PartialEq, Reflect)]
+#[reflect(Resource)]
+pub struct FilterSettings {
+    pub filter: FilterKind,
+}
+
 pub struct MotionPlugin;
 
 impl Plugin for MotionPlugin {
@@ -79,6 +88,8 @@ impl Plugin for MotionPlugin {
         // works alone (an app without them sees no frames and the default placement).
         app.init_resource::<SensorFeed>()
             .init_resource::<SensorPlacement>()
+            .init_resource::<FilterSettings>()
+            .register_type::<FilterSettings>()
             .configure_sets(
                 PostUpdate,
                 (
@@ -92,11 +103,24 @@ impl Plugin for MotionPlugin {
             .add_systems(
                 PostUpdate,
                 (
-                    retarget.in_set(MotionSystems::Retarget),
+                    (apply_filter_settings, retarget)
+                        .chain()
+                        .in_set(MotionSystems::Retarget),
                     follow_body_shape.in_set(MotionSystems::FollowShape),
                     apply_pose.in_set(MotionSystems::ApplyPose),
                 ),
             );
+    }
+}
+
+/// A changed [`FilterSettings`] replaces the running filter (its state is not carried over:
+/// another filter's state has another meaning).
+fn apply_filter_settings(settings: Res<FilterSettings>, motion: Option<ResMut<AvatarMotion>>) {
+    let Some(mut motion) = motion else {
+        return;
+    };
+    if settings.is_changed() && !settings.is_added() {
+        motion.pipeline.filter = settings.filter.build();
     }
 }
 

@@ -136,3 +136,43 @@ fn the_t_pose_raises_the_arms_and_keeps_the_bones() {
     let pelvis = skeleton.index_of("pelvis").expect("pelvis");
     assert_eq!(t.heads[pelvis], a.heads[pelvis]);
 }
+
+/// Editing [`FilterSettings`] (as the inspector or a configuration would) replaces the filter
+/// the avatar runs: the Kalman filter lags a walking person; no filter passes the frames on.
+#[test]
+fn a_changed_filter_setting_replaces_the_running_filter() {
+    use fitroom_motion::plugin::FilterSettings;
+    let skeleton = common::skeleton();
+    let frames = common::clean_frames("07_01.bvh");
+    let pipeline = MotionPipeline::new(
+        AvatarPipeline::new(&skeleton, -0.8).expect("pipeline"),
+        FilterSettings::default().filter.build(),
+    );
+    let mut app = App::new();
+    app.add_plugins((MinimalPlugins, MotionPlugin))
+        .insert_resource(AvatarMotion::new(pipeline));
+    let largest_lag = |app: &App| {
+        let motion = app.world().resource::<AvatarMotion>();
+        let (raw, filtered) = (
+            motion.last_raw.as_ref().expect("a frame"),
+            motion.last_filtered.as_ref().expect("a frame"),
+        );
+        raw.joints
+            .iter()
+            .zip(&filtered.joints)
+            .map(|(r, f)| r.position.distance(f.position))
+            .fold(0.0f32, f32::max)
+    };
+    for frame in &frames[..40] {
+        app.world_mut().resource_mut::<SensorFeed>().new_frames = vec![frame.clone()];
+        app.update();
+    }
+    assert!(largest_lag(&app) > 1e-3, "the Kalman filter smooths");
+
+    app.world_mut().resource_mut::<FilterSettings>().filter = FilterKind::None;
+    for frame in &frames[40..45] {
+        app.world_mut().resource_mut::<SensorFeed>().new_frames = vec![frame.clone()];
+        app.update();
+        assert_eq!(largest_lag(&app), 0.0, "no filter: the frame as measured");
+    }
+}

@@ -46,6 +46,7 @@ use serde::{Deserialize, Serialize};
 use super::{JointFilter, TrackingState, frame_with_positions};
 
 /// The five `NUI_TRANSFORM_SMOOTH_PARAMETERS`.
+#[cfg_attr(feature = "plugin", derive(bevy::reflect::Reflect))]
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct HoltParams {
     /// `fSmoothing`, 0..1: weight of the previous estimate plus trend (0 returns raw data).

@@ -64,6 +64,7 @@ use serde::{Deserialize, Serialize};
 use super::{JointFilter, TrackingState, frame_with_positions};
 
 /// The motion model of each joint axis.
+#[cfg_attr(feature = "plugin", derive(bevy::reflect::Reflect))]
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum KalmanModel {
     /// State `[position, velocity]`, white-noise acceleration of PSD `q` (m²/s³).
@@ -82,6 +83,7 @@ impl KalmanModel {
 }
 
 /// Parameters of [`KalmanFilter`]. See the module docs.
+#[cfg_attr(feature = "plugin", derive(bevy::reflect::Reflect))]
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct KalmanParams {
     pub model: KalmanModel,

@@ -74,6 +74,7 @@ impl TrackingState {
 }
 
 /// Which filter to run; [`FilterKind::build`] makes it.
+#[cfg_attr(feature = "plugin", derive(bevy::reflect::Reflect))]
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub enum FilterKind {
     /// Raw positions (only non-finite values are replaced by the last finite one).

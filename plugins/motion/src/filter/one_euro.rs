@@ -44,6 +44,7 @@ use super::{JointFilter, frame_with_positions};
 use crate::metrics;
 
 /// Parameters of the One Euro filter.
+#[cfg_attr(feature = "plugin", derive(bevy::reflect::Reflect))]
 #[derive(Clone, Copy, Debug, PartialEq, Serialize, Deserialize)]
 pub struct OneEuroParams {
     /// Minimum cutoff frequency, Hz (the cutoff at rest).
