@@ -1,0 +1,69 @@
+//! The depth camera's speed goals: a synthetic 640x480 frame of the avatar in a room (the
+//! MakeHuman body at 2.5 m, floor and back wall; every part of the error model) on one core,
+//! and reading one recorded frame back from a fakenect folder.
+//!
+//! Run: `cargo bench -p fitroom_depth --bench depth` (add `-- --quick` for a short run).
+
+use std::hint::black_box;
+use std::path::Path;
+
+use criterion::{Criterion, criterion_group, criterion_main};
+use fitroom_body::{BodyModel, MODEL_TO_SENSOR};
+use fitroom_depth::DepthCamera;
+use fitroom_depth::fakenect::{Recording, RecordingWriter};
+use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
+use glam::Vec3;
+
+/// The shipped body standing 2.5 m in front of a sensor 0.8 m above the floor, in a room.
+fn avatar_scene() -> Scene {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
+    let model = BodyModel::read(&path).expect("the shipped body");
+    let n = model.body_vertex_count as usize;
+    let sole = model.positions[..n]
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min);
+    let positions = model.positions[..n]
+        .iter()
+        .map(|&p| MODEL_TO_SENSOR * (p - Vec3::Y * sole) + Vec3::new(0.0, -0.8, 2.5))
+        .collect();
+    let mut scene = Scene::room(-0.8, 3.6);
+    scene.meshes.push(SceneMesh {
+        positions,
+        triangles: model.triangles.clone(),
+        label: Label::Body,
+    });
+    scene
+}
+
+fn bench(c: &mut Criterion) {
+    let scene = avatar_scene();
+    let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
+    let mut camera = SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), 1);
+    c.bench_function(
+        &format!("synthetic_frame_640x480_avatar_in_room_{triangles}_triangles"),
+        |b| b.iter(|| black_box(camera.render(&scene, 0.0))),
+    );
+
+    let dir = std::env::temp_dir().join(format!("fitroom-depth-bench-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&dir);
+    let mut writer = RecordingWriter::create(&dir).expect("a scratch folder");
+    let frame = camera.render(&scene, 0.0);
+    let raw = frame.frame.raw.expect("raw values");
+    writer.write_depth(0.0, 0, &raw).expect("written");
+    let recording = Recording::open(&dir).expect("reads");
+    let entry = recording.depth_entries().next().expect("a frame").clone();
+    c.bench_function("fakenect_read_one_depth_frame", |b| {
+        b.iter(|| {
+            black_box(
+                recording
+                    .read_depth(&entry, DepthCamera::default())
+                    .expect("reads"),
+            )
+        })
+    });
+    let _ = std::fs::remove_dir_all(&dir);
+}
+
+criterion_group!(benches, bench);
+criterion_main!(benches);

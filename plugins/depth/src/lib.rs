@@ -1,0 +1,19 @@
+//! The Kinect v1 depth stream (seed 000 reads a 640x480 depth map at 30 Hz for the skeleton,
+//! the body measurement of ch. 6 and the hand gestures of App. C):
+//!
+//! - [`camera`]: the depth camera's model, the 11-bit raw disparity scale and its conversion
+//!   to metres, projection between pixels and sensor space;
+//! - [`frame`]: [`DepthFrame`], the sensor's currency (depth in millimetres, the raw values,
+//!   optional RGB, timestamp, camera), its images shared rather than copied;
+//! - [`fakenect`]: libfreenect's record/replay folder format, read and written in pure Rust.
+
+#![forbid(unsafe_code)]
+
+pub mod camera;
+pub mod fakenect;
+pub mod frame;
+pub mod noise;
+pub mod synthetic;
+
+pub use camera::{DepthCamera, HEIGHT, PIXELS, RAW_NO_VALUE, WIDTH};
+pub use frame::DepthFrame;
