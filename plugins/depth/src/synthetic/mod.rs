@@ -252,12 +252,12 @@ impl SyntheticCamera {
                 let (sigma, grazing) = self.facing_terms(facing);
                 let (mut si, mut sj) = (i, j);
                 if self.noise.lateral && true_z[k].is_finite() {
-                    si = (i as f32 + sigma * gauss(0))
-                        .round()
-                        .clamp(0.0, WIDTH as f32 - 1.0) as usize;
-                    sj = (j as f32 + sigma * gauss(16))
-                        .round()
-                        .clamp(0.0, HEIGHT as f32 - 1.0) as usize;
+                    // Rounded by a cast after clamping (see `camera::metres_to_raw`).
+                    let at = |c: usize, g: f32, n: usize| {
+                        ((c as f32 + sigma * g).clamp(0.0, n as f32 - 1.0) + 0.5) as usize
+                    };
+                    si = at(i, gauss(0), WIDTH);
+                    sj = at(j, gauss(16), HEIGHT);
                 }
                 let s = sj * WIDTH + si;
                 let z = true_z[s];
