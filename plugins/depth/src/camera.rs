@@ -104,7 +104,7 @@ pub fn metres_to_raw(z: f32) -> Option<u16> {
     }
     // Rounded by a cast (`f64::round` is a library call on baseline x86-64; this runs per
     // pixel); negative values fail the range test first.
-    let raw = (RAW_OFFSET - 1.0 / f64::from(z)) / RAW_SCALE + 0.5;
+    let raw = (RAW_OFFSET - 1.0 / f64::from(z)) * (1.0 / RAW_SCALE) + 0.5;
     (0.0..f64::from(RAW_NO_VALUE))
         .contains(&raw)
         .then_some(raw as u16)

@@ -276,7 +276,10 @@ impl SyntheticCamera {
                     // Nguyen et al.'s σz ([`crate::noise::axial_sigma_m`]) with the tabulated
                     // grazing factor.
                     let d = z - 0.4;
-                    let sigma = 0.0012 + 0.0019 * d * d + 0.0001 / z.sqrt() * grazing;
+                    let mut sigma = 0.0012 + 0.0019 * d * d;
+                    if grazing > 1e-4 {
+                        sigma += 0.0001 / z.sqrt() * grazing;
+                    }
                     z + sigma * gauss(32)
                 } else {
                     z
