@@ -115,6 +115,12 @@ pub fn raw_to_mm(raw: u16) -> u16 {
     raw_to_metres(raw).map_or(0, |z| (z * 1000.0).round().min(f32::from(u16::MAX)) as u16)
 }
 
+/// [`raw_to_mm`] of every raw value (0 to 2047), computed once.
+pub fn raw_mm_table() -> &'static [u16] {
+    static TABLE: std::sync::OnceLock<Vec<u16>> = std::sync::OnceLock::new();
+    TABLE.get_or_init(|| (0..=RAW_NO_VALUE).map(raw_to_mm).collect())
+}
+
 /// The depth difference of one raw step at `z` metres (the quantisation step), metres.
 pub fn raw_step_m(z: f32) -> f32 {
     (RAW_SCALE * f64::from(z) * f64::from(z)) as f32

@@ -30,8 +30,7 @@ impl DepthFrame {
     pub fn from_raw(raw: Vec<u16>, time_s: f64, timestamp: u32, camera: DepthCamera) -> Self {
         debug_assert_eq!(raw.len(), PIXELS);
         let raw: Vec<u16> = raw.into_iter().map(|r| r.min(RAW_NO_VALUE)).collect();
-        // 2048 conversions instead of one per pixel.
-        let mm: Vec<u16> = (0..=RAW_NO_VALUE).map(camera::raw_to_mm).collect();
+        let mm = camera::raw_mm_table();
         let depth_mm: Vec<u16> = raw.iter().map(|&r| mm[usize::from(r)]).collect();
         Self {
             depth_mm: depth_mm.into(),

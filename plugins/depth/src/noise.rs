@@ -19,14 +19,28 @@ pub const GRAZING_LIMIT: f32 = 80.0 * std::f32::consts::PI / 180.0;
 /// Axial standard deviation at depth `z` metres on a surface at `theta` radians from facing
 /// the camera, metres (Nguyen et al. 2012, eq. 6).
 pub fn axial_sigma_m(z: f32, theta: f32) -> f32 {
+    axial_sigma_with_grazing_m(z, grazing_factor(theta))
+}
+
+/// The grazing factor `θ² / (π/2 - θ)²` of [`axial_sigma_m`] (0 facing the camera); a caller
+/// with many pixels tabulates it.
+pub fn grazing_factor(theta: f32) -> f32 {
     let theta = theta.clamp(0.0, GRAZING_LIMIT);
+    let rest = FRAC_PI_2 - theta;
+    theta * theta / (rest * rest)
+}
+
+/// [`axial_sigma_m`] from the grazing factor of the surface's angle.
+#[inline]
+pub fn axial_sigma_with_grazing_m(z: f32, grazing: f32) -> f32 {
     let d = z - 0.4;
-    let grazing = if theta > 0.0 {
-        0.0001 / z.max(1e-3).sqrt() * theta * theta / ((FRAC_PI_2 - theta) * (FRAC_PI_2 - theta))
+    let sigma = 0.0012 + 0.0019 * d * d;
+    // Nothing to add facing the camera (the common case; saves a square root per pixel).
+    if grazing > 1e-6 {
+        sigma + 0.0001 / z.max(1e-3).sqrt() * grazing
     } else {
-        0.0
-    };
-    0.0012 + 0.0019 * d * d + grazing
+        sigma
+    }
 }
 
 /// Lateral standard deviation on a surface at `theta` radians from facing the camera, pixels

@@ -29,7 +29,7 @@ use rand_distr::{Distribution, StandardNormal};
 
 use crate::camera::{self, DepthCamera, HEIGHT, PIXELS, RAW_NO_VALUE, WIDTH};
 use crate::frame::DepthFrame;
-use crate::noise::{GRAZING_LIMIT, lateral_sigma_px};
+use crate::noise::{GRAZING_LIMIT, axial_sigma_with_grazing_m, grazing_factor, lateral_sigma_px};
 pub use raster::DepthBuffer;
 
 /// What a surface is, for the per-pixel ground truth.
@@ -187,8 +187,6 @@ pub struct SyntheticCamera {
     /// Per `|cos θ|` in 1/1024 steps: the lateral σ (px) and the grazing factor
     /// `θ² / (π/2 - θ)²` of the axial σ, so no pixel computes an arc cosine.
     facing_table: Vec<(f32, f32)>,
-    /// Millimetres of every raw value.
-    raw_mm: Vec<u16>,
     view: DepthBuffer,
 }
 
@@ -207,11 +205,9 @@ impl SyntheticCamera {
             facing_table: (0..=FACING_STEPS)
                 .map(|k| {
                     let theta = facing_angle(k as f32 / FACING_STEPS as f32);
-                    let rest = (std::f32::consts::FRAC_PI_2 - theta).max(1e-3);
-                    (lateral_sigma_px(theta), theta * theta / (rest * rest))
+                    (lateral_sigma_px(theta), grazing_factor(theta))
                 })
                 .collect(),
-            raw_mm: (0..=RAW_NO_VALUE).map(camera::raw_to_mm).collect(),
             view: DepthBuffer::default(),
         }
     }
@@ -273,13 +269,7 @@ impl SyntheticCamera {
                     continue;
                 }
                 let z = if self.noise.axial {
-                    // Nguyen et al.'s σz ([`crate::noise::axial_sigma_m`]) with the tabulated
-                    // grazing factor.
-                    let d = z - 0.4;
-                    let mut sigma = 0.0012 + 0.0019 * d * d;
-                    if grazing > 1e-4 {
-                        sigma += 0.0001 / z.sqrt() * grazing;
-                    }
+                    let sigma = axial_sigma_with_grazing_m(z, grazing);
                     z + sigma * gauss(32)
                 } else {
                     z
@@ -287,7 +277,7 @@ impl SyntheticCamera {
                 if let Some(r) = camera::metres_to_raw(z) {
                     raw[k] = r;
                     depth_mm[k] = if self.noise.quantise {
-                        self.raw_mm[usize::from(r)]
+                        camera::raw_mm_table()[usize::from(r)]
                     } else {
                         (z * 1000.0).round().min(f32::from(u16::MAX)) as u16
                     };
