@@ -32,6 +32,7 @@ fn avatar_scene() -> Scene {
         positions,
         triangles: model.triangles.clone(),
         label: Label::Body,
+        closed: true,
     });
     scene
 }

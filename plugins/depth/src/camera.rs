@@ -110,6 +110,21 @@ pub fn metres_to_raw(z: f32) -> Option<u16> {
         .then_some(raw as u16)
 }
 
+/// The continuous raw value of inverse depth `inverse_z` (1/m): raw values are linear in
+/// inverse depth, so a per-pixel caller needs no division.
+#[inline]
+pub fn inverse_metres_to_raw_f32(inverse_z: f32) -> f32 {
+    const C0: f32 = (RAW_OFFSET / RAW_SCALE) as f32;
+    const C1: f32 = (1.0 / RAW_SCALE) as f32;
+    C0 - C1 * inverse_z
+}
+
+/// Metres of a continuous raw value; `None` where the fit puts it at or behind infinity.
+pub fn raw_f32_to_metres(raw: f32) -> Option<f32> {
+    let inverse = RAW_OFFSET as f32 - RAW_SCALE as f32 * raw;
+    (inverse > 0.0).then(|| 1.0 / inverse)
+}
+
 /// Millimetres of a raw value, 0 for no reading (libfreenect's `FREENECT_DEPTH_MM` encoding).
 pub fn raw_to_mm(raw: u16) -> u16 {
     raw_to_metres(raw).map_or(0, |z| (z * 1000.0).round().min(f32::from(u16::MAX)) as u16)

@@ -18,6 +18,7 @@
 //! 8. dropouts where the correlation window straddles a depth edge: half the pixels next to
 //!    a jump, and every pixel of a part one pixel thin.
 
+pub mod edges;
 pub mod raster;
 
 use std::sync::Arc;
@@ -49,6 +50,10 @@ pub struct SceneMesh {
     pub positions: Vec<Vec3>,
     pub triangles: Vec<[u32; 3]>,
     pub label: Label,
+    /// A closed mesh with outward (counter-clockwise) faces, such as the body: the faces
+    /// turned away from the camera are skipped. Open meshes (a garment, a wall) are seen
+    /// from both sides.
+    pub closed: bool,
 }
 
 /// What the synthetic camera sees.
@@ -118,6 +123,7 @@ impl Scene {
             positions: corners.to_vec(),
             triangles: vec![[0, 1, 2], [0, 2, 3]],
             label,
+            closed: false,
         });
     }
 }
@@ -177,6 +183,14 @@ pub struct SyntheticFrame {
 /// ChaCha8 draw and a table read per sample, instead of a transcendental per sample).
 const TABLE: usize = 1 << 16;
 
+/// A pixel without a reading, in [`SyntheticCamera::sample`].
+const LOST: u32 = u32::MAX;
+
+/// Entries of a lateral offset table (12 bits of a pixel's hash).
+const LATERAL_ENTRIES: usize = 1 << 12;
+/// Lateral σ levels, from 0.8 px (facing the camera) up (see [`lateral_level`]).
+const LATERAL_LEVELS: usize = 16;
+
 /// The synthetic depth camera.
 pub struct SyntheticCamera {
     pub camera: DepthCamera,
@@ -184,17 +198,39 @@ pub struct SyntheticCamera {
     seed: u64,
     frames: u64,
     normals: Vec<f32>,
-    /// Per `|cos θ|` in 1/1024 steps: the lateral σ (px) and the grazing factor
+    /// Per `cos² θ` in 1/1024 steps: the lateral σ level and the grazing factor
     /// `θ² / (π/2 - θ)²` of the axial σ, so no pixel computes an arc cosine.
-    facing_table: Vec<(f32, f32)>,
+    facing_table: Vec<(u8, f32)>,
+    /// Per lateral σ level, whole-pixel offsets `round(σ g)` for normal samples `g`: a
+    /// pixel's lateral error is two table reads.
+    lateral_offsets: Vec<[i8; LATERAL_ENTRIES]>,
+    /// Per raw value: the axial σ facing the camera and its grazing coefficient, in raw
+    /// steps (see [`axial_sigma_raw`]).
+    axial_table: Vec<(f32, f32)>,
+    /// `1 / |r|²` of each pixel's ray (see [`raster::DepthBuffer::normal_dot_ray`]).
+    inverse_ray2: Vec<f32>,
     view: DepthBuffer,
+    /// Per pixel, the pixel its reading comes from ([`LOST`]: none) and its axial error in
+    /// raw steps (scratch of [`Self::render`]).
+    sample: Vec<u32>,
+    axial_noise: Vec<f32>,
+    edges: edges::EdgeFlags,
+    /// The last frame's images, reused when the caller has dropped them (no fresh pages
+    /// per frame).
+    spare: Option<SyntheticFrame>,
 }
 
 impl SyntheticCamera {
     pub fn new(camera: DepthCamera, noise: NoiseSettings, seed: u64) -> Self {
         let mut rng = ChaCha8Rng::seed_from_u64(0x6b69_6e65_6374);
-        let normals = (0..TABLE)
+        let normals: Vec<f32> = (0..TABLE)
             .map(|_| StandardNormal.sample(&mut rng))
+            .collect();
+        let lateral_offsets = (0..LATERAL_LEVELS)
+            .map(|level| {
+                let sigma = lateral_sigma_of_level(level);
+                std::array::from_fn(|m| (sigma * normals[m]).round().clamp(-127.0, 127.0) as i8)
+            })
             .collect();
         Self {
             camera,
@@ -204,11 +240,21 @@ impl SyntheticCamera {
             normals,
             facing_table: (0..=FACING_STEPS)
                 .map(|k| {
-                    let theta = facing_angle(k as f32 / FACING_STEPS as f32);
-                    (lateral_sigma_px(theta), grazing_factor(theta))
+                    let theta = facing_angle((k as f32 / FACING_STEPS as f32).sqrt());
+                    (
+                        lateral_level(lateral_sigma_px(theta)),
+                        grazing_factor(theta),
+                    )
                 })
                 .collect(),
+            lateral_offsets,
+            axial_table: (0..=RAW_NO_VALUE).map(axial_sigma_raw).collect(),
+            inverse_ray2: raster::inverse_ray_length_squared(&camera),
             view: DepthBuffer::default(),
+            sample: vec![LOST; PIXELS],
+            axial_noise: vec![0.0; PIXELS],
+            edges: edges::EdgeFlags::default(),
+            spare: None,
         }
     }
 
@@ -221,88 +267,185 @@ impl SyntheticCamera {
         self.view.clear();
         for m in &scene.meshes {
             self.view
-                .draw(&cam, &m.positions, &m.triangles, m.label as u8);
+                .draw(&cam, &m.positions, &m.triangles, m.label as u8, m.closed);
         }
-        let true_z: Vec<f32> = self.view.inverse_z.iter().map(|&iz| 1.0 / iz).collect();
-        let shadow = if self.noise.shadow {
-            projector_shadow(&true_z, &cam)
-        } else {
-            vec![false; PIXELS]
-        };
-        let grazing_cos = GRAZING_LIMIT.cos();
-        let mut raw = vec![RAW_NO_VALUE; PIXELS];
-        let mut depth_mm = vec![0u16; PIXELS];
+        let mut images = Images::take(self.spare.take());
+        // Unique by construction (`Images::take`): no copy is made here.
+        let out_mm = Arc::make_mut(&mut images.depth_mm);
+        let out_raw = Arc::make_mut(&mut images.raw);
+        let iz = &self.view.inverse_z;
+        for (t, &v) in Arc::make_mut(&mut images.true_z).iter_mut().zip(iz) {
+            *t = if v > 0.0 { 1.0 / v } else { f32::INFINITY };
+        }
+        Arc::make_mut(&mut images.labels).copy_from_slice(&self.view.label);
+        self.edges
+            .compute(iz, &cam, self.noise.shadow, self.noise.dropouts);
+        let flags = &self.edges.flags;
+        out_raw.fill(RAW_NO_VALUE);
+        out_mm.fill(0);
+        let n = self.noise;
+        let cos2_limit = GRAZING_LIMIT.cos().powi(2);
+        let (iz_far, iz_near) = (1.0 / cam.max_m, 1.0 / cam.min_m);
+        let mm_of_raw = camera::raw_mm_table();
+        let (width, height) = (WIDTH as isize, HEIGHT as isize);
+        // Two passes, each with short chains of dependent reads (one long chain per pixel
+        // leaves the processor waiting): first, per pixel, whether it is lost, where its
+        // lateral error makes it read, and its axial error in raw steps; then the readings.
+        let (sample, axial) = (&mut self.sample, &mut self.axial_noise);
         for j in 0..HEIGHT {
             for i in 0..WIDTH {
                 let k = j * WIDTH + i;
-                // One hash per pixel gives its three normal samples and its coin, so that
-                // one pixel's fate does not shift the noise of the others.
+                sample[k] = LOST;
+                let here = iz[k];
+                if here == 0.0 {
+                    continue;
+                }
+                // One hash per pixel gives its lateral offsets, its normal sample and its
+                // coin, so that one pixel's fate does not shift the noise of the others.
                 let h = splitmix64(stream ^ k as u64);
-                let gauss = |shift: u32| self.normals[((h >> shift) & 0xffff) as usize];
-                if self.noise.dropouts && edge_dropout(&true_z, i, j, h >> 63 == 1) {
+                // Lost: a thin part, or beside a jump on the coin's toss. One test on the
+                // combined bits: testing the coin first, as the compiler may order `||`, is a
+                // branch mispredicted on every other pixel.
+                let coin = (h >> 63) as u8;
+                if flags[k] & (edges::THIN | (edges::JUMP * coin)) != 0 {
                     continue;
                 }
                 // How squarely the surface here faces its ray (the neighbour a lateral error
                 // reads is, but at edges, the same surface).
-                let facing = self.view.facing(&cam, i, j);
-                let (sigma, grazing) = self.facing_terms(facing);
-                let (mut si, mut sj) = (i, j);
-                if self.noise.lateral && true_z[k].is_finite() {
-                    // Rounded by a cast after clamping (see `camera::metres_to_raw`).
-                    let at = |c: usize, g: f32, n: usize| {
-                        ((c as f32 + sigma * g).clamp(0.0, n as f32 - 1.0) + 0.5) as usize
-                    };
-                    si = at(i, gauss(0), WIDTH);
-                    sj = at(j, gauss(16), HEIGHT);
-                }
-                let s = sj * WIDTH + si;
-                let z = true_z[s];
-                if !z.is_finite() || shadow[s] {
+                let d = self.view.normal_dot_ray[k];
+                let cos2 = (d * d * self.inverse_ray2[k]).min(1.0);
+                if n.grazing && cos2 < cos2_limit {
                     continue;
                 }
-                if self.noise.grazing && facing < grazing_cos {
-                    continue;
+                let (level, grazing) =
+                    self.facing_table[round_small(cos2 * FACING_STEPS as f32) as usize];
+                let mut s = k;
+                if n.lateral {
+                    let offsets = &self.lateral_offsets[usize::from(level)];
+                    let di = offsets[(h & 0xfff) as usize] as isize;
+                    let dj = offsets[(h >> 12 & 0xfff) as usize] as isize;
+                    let si = (i as isize + di).clamp(0, width - 1);
+                    let sj = (j as isize + dj).clamp(0, height - 1);
+                    s = (sj * width + si) as usize;
                 }
-                // The range is the surface's: where the pattern is matched, not where the
-                // noisy reading lands.
-                if self.noise.range && !cam.in_range(z) {
-                    continue;
-                }
-                let z = if self.noise.axial {
-                    let sigma = axial_sigma_with_grazing_m(z, grazing);
-                    z + sigma * gauss(32)
+                sample[k] = s as u32;
+                // The axial σ at this pixel's own depth (the one read is within a pixel or
+                // two; σ changes little over that).
+                axial[k] = if n.axial {
+                    let raw = camera::inverse_metres_to_raw_f32(here);
+                    let index = round_small(raw.clamp(0.0, f32::from(RAW_NO_VALUE)));
+                    let (facing, per_grazing) = self.axial_table[index as usize];
+                    (facing + per_grazing * grazing) * self.normals[(h >> 32 & 0xffff) as usize]
                 } else {
-                    z
+                    0.0
                 };
-                if let Some(r) = camera::metres_to_raw(z) {
-                    raw[k] = r;
-                    depth_mm[k] = if self.noise.quantise {
-                        camera::raw_mm_table()[usize::from(r)]
-                    } else {
-                        (z * 1000.0).round().min(f32::from(u16::MAX)) as u16
-                    };
-                }
             }
         }
-        SyntheticFrame {
-            frame: DepthFrame {
-                depth_mm: depth_mm.into(),
-                raw: Some(raw.into()),
-                rgb: None,
-                time_s,
-                timestamp: index as u32,
-                camera: cam,
-            },
-            labels: self.view.label.clone().into(),
-            true_depth_m: true_z.into(),
+        for (k, (&s, &noise)) in sample.iter().zip(axial.iter()).enumerate() {
+            if s == LOST {
+                continue;
+            }
+            let s = s as usize;
+            let seen = iz[s];
+            if seen == 0.0 || flags[s] & edges::SHADOW != 0 {
+                continue;
+            }
+            // The range is the surface's: where the pattern is matched, not where the noisy
+            // reading lands.
+            if n.range && !(iz_far..=iz_near).contains(&seen) {
+                continue;
+            }
+            // Raw values are linear in inverse depth: the reading as a continuous raw value,
+            // its axial error added in raw steps.
+            let raw = camera::inverse_metres_to_raw_f32(seen) + noise;
+            if n.quantise {
+                // The nearest raw value, if the scale holds it.
+                if (-0.5..f32::from(RAW_NO_VALUE) - 0.5).contains(&raw) {
+                    let r = round_small(raw.max(0.0));
+                    out_raw[k] = r as u16;
+                    out_mm[k] = mm_of_raw[r as usize];
+                }
+            } else if let Some(z) = camera::raw_f32_to_metres(raw) {
+                out_mm[k] = (z * 1000.0 + 0.5).min(f32::from(u16::MAX)) as u16;
+                out_raw[k] = camera::metres_to_raw(z).unwrap_or(RAW_NO_VALUE);
+            }
+        }
+        let frame = images.into_frame(cam, time_s, index as u32);
+        self.spare = Some(frame.clone());
+        frame
+    }
+}
+
+/// The axial σ of Nguyen et al. ([`crate::noise`]) at the depth of raw value `raw`, in raw
+/// steps: facing the camera, and per unit of the grazing factor. A depth error `e` small
+/// against `z` moves the raw value by `e / (0.00307 z²)`; the spread facing the camera is
+/// about half a raw step at every depth (the matcher's sub-pixel precision).
+fn axial_sigma_raw(raw: u16) -> (f32, f32) {
+    let Some(z) = camera::raw_to_metres(raw) else {
+        return (0.0, 0.0);
+    };
+    let step = camera::raw_step_m(z);
+    let facing = axial_sigma_with_grazing_m(z, 0.0);
+    let per_grazing = axial_sigma_with_grazing_m(z, 1.0) - facing;
+    (facing / step, per_grazing / step)
+}
+
+/// A frame's images, recycled from the frame before when its caller has dropped them.
+struct Images {
+    depth_mm: Arc<[u16]>,
+    raw: Arc<[u16]>,
+    labels: Arc<[u8]>,
+    true_z: Arc<[f32]>,
+}
+
+impl Images {
+    fn take(spare: Option<SyntheticFrame>) -> Self {
+        fn reuse<T: Copy>(a: Option<Arc<[T]>>, zero: T) -> Arc<[T]> {
+            match a {
+                // The caller has dropped its frame: this is the only reference.
+                Some(a) if Arc::strong_count(&a) == 1 && Arc::weak_count(&a) == 0 => a,
+                _ => vec![zero; PIXELS].into(),
+            }
+        }
+        let (d, r, l, t) = match spare {
+            Some(f) => (
+                Some(f.frame.depth_mm),
+                f.frame.raw,
+                Some(f.labels),
+                Some(f.true_depth_m),
+            ),
+            None => (None, None, None, None),
+        };
+        Self {
+            depth_mm: reuse(d, 0),
+            raw: reuse(r, 0),
+            labels: reuse(l, 0),
+            true_z: reuse(t, 0.0),
         }
     }
 
-    /// The lateral σ and the grazing factor of a surface facing its ray by `|cos|` `facing`.
-    #[inline]
-    fn facing_terms(&self, facing: f32) -> (f32, f32) {
-        self.facing_table[(facing.clamp(0.0, 1.0) * FACING_STEPS as f32) as usize]
+    fn into_frame(self, camera: DepthCamera, time_s: f64, timestamp: u32) -> SyntheticFrame {
+        SyntheticFrame {
+            frame: DepthFrame {
+                depth_mm: self.depth_mm,
+                raw: Some(self.raw),
+                rgb: None,
+                time_s,
+                timestamp,
+                camera,
+            },
+            labels: self.labels,
+            true_depth_m: self.true_z,
+        }
     }
+}
+/// `x` rounded to the nearest integer (ties to even), for `0 <= x < 2^23`: the low bits of
+/// `x + 2^23`, whose unit is then the float's last mantissa bit. Per pixel this replaces
+/// the saturating conversion `as` compiles to, which on x86-64 is several instructions
+/// and branches (measured: a third of the time of the pass that indexes the tables).
+#[inline]
+fn round_small(x: f32) -> u32 {
+    (x + 8_388_608.0).to_bits() & 0x7f_ffff
 }
 
 /// SplitMix64 (Steele, Lea & Flood 2014): a fast, well-mixed hash of a 64-bit counter.
@@ -316,57 +459,16 @@ fn splitmix64(x: u64) -> u64 {
 /// Steps of the facing table.
 const FACING_STEPS: usize = 1024;
 
-/// Per pixel, whether the projector cannot light the surface the camera sees there.
-///
-/// The projector looks along the same axis from `b` to the sensor's right with the same
-/// intrinsics, so a point seen at `(u, v)` at depth `z` is at `(u - f b / z, v)` in the
-/// projector's image: the same row. Nearer points shift further left, so only points to a
-/// pixel's right can hide it from the projector; sweeping each row from the right, a pixel is
-/// in shadow when a point already swept lands left of it in the projector's image (the
-/// ordering constraint of stereo). Surfaces the camera does not see cannot shadow here: for a
-/// person in a room they are behind what it sees.
-fn projector_shadow(z: &[f32], camera: &DepthCamera) -> Vec<bool> {
-    let shift = camera.fx * camera.baseline_m;
-    let mut shadow = vec![false; PIXELS];
-    for (row_z, row_shadow) in z.chunks_exact(WIDTH).zip(shadow.chunks_exact_mut(WIDTH)) {
-        let mut leftmost = f32::INFINITY;
-        for i in (0..WIDTH).rev() {
-            let zi = row_z[i];
-            if !zi.is_finite() {
-                continue;
-            }
-            let u = i as f32 - shift / zi;
-            if u > leftmost {
-                row_shadow[i] = true;
-            } else {
-                leftmost = u;
-            }
-        }
-    }
-    shadow
+/// The level whose σ is nearest above `sigma` px (levels step 0.02 px from 0.8 px).
+fn lateral_level(sigma: f32) -> u8 {
+    (((sigma - 0.8) / 0.02).ceil().max(0.0) as usize).min(LATERAL_LEVELS - 1) as u8
+}
+
+fn lateral_sigma_of_level(level: usize) -> f32 {
+    0.8 + 0.02 * level as f32
 }
 
 /// The angle between a surface's normal and the ray from its `|cos|`.
 fn facing_angle(facing: f32) -> f32 {
     facing.clamp(0.0, 1.0).acos()
-}
-
-/// Whether the device loses pixel `(i, j)` at a depth edge: always for a part one pixel thin
-/// (nearer than both neighbours along a row or a column), else with `coin` beside a jump.
-fn edge_dropout(z: &[f32], i: usize, j: usize, coin: bool) -> bool {
-    if i == 0 || j == 0 || i + 1 == WIDTH || j + 1 == HEIGHT {
-        return false;
-    }
-    let k = j * WIDTH + i;
-    let here = z[k];
-    if !here.is_finite() {
-        return false;
-    }
-    let jump = |other: f32| {
-        !other.is_finite() || (here - other).abs() > 0.03_f32.max(0.02 * here.min(other))
-    };
-    let (l, r, u, d) = (z[k - 1], z[k + 1], z[k - WIDTH], z[k + WIDTH]);
-    let (jl, jr, ju, jd) = (jump(l), jump(r), jump(u), jump(d));
-    let thin = (jl && jr && l > here && r > here) || (ju && jd && u > here && d > here);
-    thin || (coin && (jl || jr || ju || jd))
 }
