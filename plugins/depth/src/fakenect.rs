@@ -142,6 +142,12 @@ pub enum FakenectError {
     NotEmpty { dir: PathBuf },
     #[error("a frame of {found} values was given; a recording holds {expected}")]
     FrameSize { found: usize, expected: usize },
+    #[error(
+        "{}: lists no depth frame (only RGB or accelerometer lines); record with the depth \
+         stream on",
+        index.display()
+    )]
+    NoDepth { index: PathBuf },
 }
 
 /// A recording opened for reading: its index, checked against the folder.

@@ -5,14 +5,21 @@
 //!   to metres, projection between pixels and sensor space;
 //! - [`frame`]: [`DepthFrame`], the sensor's currency (depth in millimetres, the raw values,
 //!   optional RGB, timestamp, camera), its images shared rather than copied;
-//! - [`fakenect`]: libfreenect's record/replay folder format, read and written in pure Rust.
+//! - [`fakenect`]: libfreenect's record/replay folder format, read and written in pure Rust;
+//! - [`colour`]: the depth colour map (Turbo, near red to far blue, no reading black) of the
+//!   contact sheet and the kiosk's picture-in-picture view;
+//! - [`sheet`]: a recording's contact sheet, its depth frames in a grid, as RGB8;
+//! - [`summary`]: a recording in numbers (frames, rate, readings, ground truth), as JSON.
 
 #![forbid(unsafe_code)]
 
 pub mod camera;
+pub mod colour;
 pub mod fakenect;
 pub mod frame;
 pub mod noise;
+pub mod sheet;
+pub mod summary;
 pub mod synthetic;
 
 pub use camera::{DepthCamera, HEIGHT, PIXELS, RAW_NO_VALUE, WIDTH};
