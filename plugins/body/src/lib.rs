@@ -115,4 +115,4 @@ pub use sizing::{
     ChartProblem, FitAtSize, Gender, MeasureAdvice, Placement, RangeCm, Recommendation, Size,
     SizeChart, SizeChartError, SizeRange, recommend, recommend_with,
 };
-pub use skinning::{RigidTransform, forward_kinematics, skin_positions};
+pub use skinning::{RigidTransform, forward_kinematics, skin_positions, skin_with_matrices};

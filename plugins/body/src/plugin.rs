@@ -24,6 +24,7 @@ use bevy::{
     prelude::*,
 };
 use fitroom_schedule::FitroomSystems;
+use glam::Affine3A;
 
 use crate::{BodyModel, MODEL_TO_SENSOR, Measurements, RestPose, Shape, ShapedBody};
 
@@ -174,6 +175,41 @@ impl Plugin for BodyPlugin {
             ),
         );
     }
+}
+
+/// The avatar's skinning transforms, rest model space to world, from the world transforms of its
+/// joint entities (bones without an entity keep the identity).
+pub fn world_skinning<'a>(
+    body: &AvatarBody,
+    joints: impl IntoIterator<Item = (&'a AvatarJoint, &'a GlobalTransform)>,
+) -> Vec<Affine3A> {
+    let mut out = vec![Affine3A::IDENTITY; body.model.bones.len()];
+    for (joint, global) in joints {
+        let i = joint.0;
+        if let (Some(slot), Some(&r), Some(&h)) = (
+            out.get_mut(i),
+            body.rest.rotations.get(i),
+            body.rest.heads.get(i),
+        ) {
+            *slot = global.affine() * Affine3A::from_rotation_translation(r, h).inverse();
+        }
+    }
+    out
+}
+
+/// The avatar's skin (its body vertices, not the helpers) in world space, posed as its joint
+/// entities are: what a depth camera sees of it.
+pub fn world_skin<'a>(
+    body: &AvatarBody,
+    joints: impl IntoIterator<Item = (&'a AvatarJoint, &'a GlobalTransform)>,
+) -> Vec<Vec3> {
+    let n = (body.model.body_vertex_count as usize).min(body.positions.len());
+    crate::skin_with_matrices(
+        &body.positions[..n],
+        &body.model.skin_joints,
+        &body.model.skin_weights,
+        &world_skinning(body, joints),
+    )
 }
 
 /// Builds the render mesh of the body (body vertices only) with skin attributes.

@@ -82,7 +82,17 @@ pub fn skin_positions(
     rest: &RestPose,
     posed: &[RigidTransform],
 ) -> Vec<Vec3> {
-    let matrices = skinning_matrices(rest, posed);
+    skin_with_matrices(positions, joints, weights, &skinning_matrices(rest, posed))
+}
+
+/// [`skin_positions`] with the skinning matrices already made (rest model space to the
+/// space the pose is in, e.g. world space from the avatar's joint entities).
+pub fn skin_with_matrices(
+    positions: &[Vec3],
+    joints: &[[u16; 4]],
+    weights: &[[f32; 4]],
+    matrices: &[Affine3A],
+) -> Vec<Vec3> {
     positions
         .iter()
         .enumerate()
@@ -90,8 +100,7 @@ pub fn skin_positions(
             let (Some(j), Some(w)) = (joints.get(v), weights.get(v)) else {
                 return p;
             };
-            let m = blend(&matrices, j, w);
-            m.transform_point3(p)
+            blend(matrices, j, w).transform_point3(p)
         })
         .collect()
 }

@@ -31,7 +31,7 @@ use bevy::{
 };
 use fitroom_body::{
     ShapedBody,
-    plugin::{AvatarBody, AvatarJoint, HiddenSkin},
+    plugin::{AvatarBody, AvatarJoint, HiddenSkin, world_skinning},
 };
 use fitroom_cloth::SolverSettings;
 use fitroom_schedule::FitroomSystems;
@@ -110,6 +110,18 @@ pub struct WornGarment {
     previous: Option<Vec<Affine3A>>,
     /// The drawn surface (positions, normals), kept between frames.
     surface: (Vec<Vec3>, Vec<Vec3>),
+}
+
+impl WornGarment {
+    /// The drawn surface in world space (positions, normals; empty before the first step).
+    pub fn surface(&self) -> (&[Vec3], &[Vec3]) {
+        (&self.surface.0, &self.surface.1)
+    }
+
+    /// The surface's triangles.
+    pub fn triangles(&self) -> &[[u32; 3]] {
+        self.sim.triangles()
+    }
 }
 
 /// The garment asset requested, and whether the avatar must be dressed again.
@@ -243,22 +255,6 @@ fn follow_garment_asset(
             status.error = Some(message);
         }
     }
-}
-
-/// The avatar's skinning transforms: rest model space to world.
-fn skinning(body: &AvatarBody, joints: &Query<(&AvatarJoint, &GlobalTransform)>) -> Vec<Affine3A> {
-    let mut out = vec![Affine3A::IDENTITY; body.model.bones.len()];
-    for (joint, global) in joints {
-        let i = joint.0;
-        if let (Some(slot), Some(&r), Some(&h)) = (
-            out.get_mut(i),
-            body.rest.rotations.get(i),
-            body.rest.heads.get(i),
-        ) {
-            *slot = global.affine() * Affine3A::from_rotation_translation(r, h).inverse();
-        }
-    }
-    out
 }
 
 fn garment_mesh(
@@ -418,7 +414,7 @@ fn dress_avatar(
             return;
         }
     };
-    let skin = skinning(&body, &joints);
+    let skin = world_skinning(&body, joints);
     sim.set_measuring(false);
     let floor = sim.set_floor(Some(0.0)).and_then(|_| sim.reset(&skin));
     if let Err(e) = floor {
@@ -483,7 +479,7 @@ fn step_garment(
     let Some(body) = body else {
         return;
     };
-    let skin = skinning(&body, &joints);
+    let skin = world_skinning(&body, joints);
     let dt = 1.0 / settings.rate_hz.max(1.0);
     for (entity, mut g) in &mut worn {
         let start = Instant::now();
@@ -558,13 +554,15 @@ fn step_garment(
         if cfg!(debug_assertions) && !g.sim.positions().iter().all(|p| p.is_finite()) {
             error!("garment positions are not finite after the step");
         }
+        // The surface is kept without a renderer too: the synthetic depth camera sees it.
+        let g = &mut *g;
+        let (positions, normals) = &mut g.surface;
+        g.sim.render_surface_into(positions, normals);
         if let Some(meshes) = meshes.as_mut()
             && let Some(mut mesh) = meshes.get_mut(&g.mesh)
         {
             let strain = settings.fit_map.then(|| g.sim.strain_pct());
-            let g = &mut *g;
-            let (positions, normals) = &mut g.surface;
-            g.sim.render_surface_into(positions, normals);
+            let (positions, normals) = &g.surface;
             update_garment_mesh(
                 &mut mesh,
                 (positions, normals),
