@@ -9,7 +9,12 @@
 //! - [`colour`]: the depth colour map (Turbo, near red to far blue, no reading black) of the
 //!   contact sheet and the kiosk's picture-in-picture view;
 //! - [`sheet`]: a recording's contact sheet, its depth frames in a grid, as RGB8;
-//! - [`summary`]: a recording in numbers (frames, rate, readings, ground truth), as JSON.
+//! - [`summary`]: a recording in numbers (frames, rate, readings, ground truth), as JSON;
+//! - [`player`]: a recording played as a live stream, at its pace, looping;
+//! - [`truth`]: the ground truth written beside a synthetic recording;
+//! - [`synthetic`]: the synthetic Kinect v1 with the published error model.
+//!
+//! The `plugin` feature adds [`plugin::DepthFeed`], the depth stream as a Bevy resource.
 
 #![forbid(unsafe_code)]
 
@@ -18,9 +23,14 @@ pub mod colour;
 pub mod fakenect;
 pub mod frame;
 pub mod noise;
+pub mod player;
 pub mod sheet;
 pub mod summary;
 pub mod synthetic;
+pub mod truth;
+
+#[cfg(feature = "plugin")]
+pub mod plugin;
 
 pub use camera::{DepthCamera, HEIGHT, PIXELS, RAW_NO_VALUE, WIDTH};
 pub use frame::DepthFrame;

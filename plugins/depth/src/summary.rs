@@ -12,7 +12,7 @@ use crate::fakenect::{EntryKind, FakenectError, Recording};
 
 /// The ground-truth file a synthetic recorder writes beside `INDEX.txt`: one JSON object per
 /// depth frame, in the index's order.
-pub const GROUND_TRUTH: &str = "groundtruth.jsonl";
+pub use crate::truth::TRUTH_FILE as GROUND_TRUTH;
 
 /// A recording in numbers (see [`summarise`]).
 #[derive(Debug, Clone, serde::Serialize)]

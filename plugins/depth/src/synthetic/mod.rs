@@ -9,7 +9,7 @@
 //!    edges wander as they do on the device;
 //! 3. no reading where the surface is more oblique than [`crate::noise::GRAZING_LIMIT`];
 //! 4. the projector's shadow: no reading where the projector, 7.5 cm to the sensor's right,
-//!    cannot light the point (found per row, [`projector_shadow`]);
+//!    cannot light the point (found per row, `edges::mark_shadow`);
 //!    beside a foreground edge at `z1` over a background at `z2` that band is
 //!    `f b (1/z1 - 1/z2)` pixels wide, on the image's left of the edge;
 //! 5. no reading where the surface is outside the camera's range (0.8-4 m);
