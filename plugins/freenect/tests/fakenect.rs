@@ -1,4 +1,5 @@
-//! The live source end to end, without a Kinect: a recording written in pure Rust is replayed
+//! The live source end to end, without a Kinect: a recording written in pure Rust (synthetic
+//! camera frames and frames holding every raw value) is replayed
 //! by Debian's fakenect through libfreenect's own API (the library the source loads, found
 //! through `LD_LIBRARY_PATH`), captured by `freenect-capture` in a child process, and must come
 //! back bit for bit, every frame, in order.
@@ -11,7 +12,9 @@ use std::process::Command;
 use std::time::Instant;
 
 use fitroom_depth::fakenect::{AccelState, Recording, RecordingWriter};
+use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SyntheticCamera};
 use fitroom_depth::{DepthCamera, PIXELS, RAW_NO_VALUE, WIDTH};
+use glam::Vec3;
 
 /// Debian 12's fakenect (package libfreenect0.5, pulled in by libfreenect-dev).
 const FAKENECT_DIR: &str = "/usr/lib/x86_64-linux-gnu/fakenect";
@@ -36,9 +39,27 @@ impl Drop for Scratch {
     }
 }
 
-/// Frame `k`: every raw value from 0 to 2046 somewhere, in a pattern that differs per frame,
-/// and a block of no readings (2047) that moves with `k`.
+/// Frame `k`: for even `k`, the synthetic Kinect v1 seeing a box moving before the wall of a
+/// room (every part of its error model, so holes, shadows and noise); for odd `k`, every raw
+/// value from 0 to 2046 somewhere, in a pattern that differs per frame, and a block of no
+/// readings (2047) that moves with `k`.
 fn raw_frame(k: usize) -> Vec<u16> {
+    if k.is_multiple_of(2) {
+        let mut scene = Scene::room(-0.8, 3.6);
+        scene.add_box(
+            Vec3::new(-0.4 + 0.1 * k as f32, 0.0, 2.0),
+            Vec3::new(0.2, 0.5, 0.15),
+            Label::Other,
+        );
+        let mut camera =
+            SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), k as u64);
+        let frame = camera.render(&scene, k as f64 / 30.0);
+        return frame
+            .frame
+            .raw
+            .expect("the synthetic camera gives raw values")
+            .to_vec();
+    }
     (0..PIXELS)
         .map(|i| {
             let (u, v) = (i % WIDTH, i / WIDTH);
