@@ -7,9 +7,11 @@
 pub mod assets;
 pub mod body_panel;
 pub mod cli;
+pub mod depth_scene;
 pub mod design;
 pub mod headless;
 pub mod kiosk;
+pub mod sensors;
 pub mod timing;
 
 use std::{path::PathBuf, sync::Arc, time::Duration};
@@ -37,7 +39,7 @@ use fitroom_sensor::{
     bvh::BvhClip,
     bvh_source::{BvhSource, BvhSourceOptions},
     noise::NoisySource,
-    plugin::{ActiveSensor, SensorPlugin},
+    plugin::{ActiveSensor, SensorFeed, SensorPlugin},
 };
 
 /// How the app runs.
@@ -57,8 +59,15 @@ pub struct AppOptions {
     pub mode: Mode,
     /// The converted body (`assets/bodies/makehuman.fitbody` by default).
     pub body: PathBuf,
-    /// The motion clip that drives the avatar (`assets/motions/walk.bvh` by default).
+    /// Where frames come from (the kiosk configuration's `sensor` by default).
+    pub sensor: sensors::SensorSpec,
+    /// The motion clip that drives the avatar with a `bvh:` or `synthetic` sensor (the
+    /// configuration's clip, else `assets/motions/walk.bvh`).
     pub motion: PathBuf,
+    /// Seed of the synthetic depth camera's noise.
+    pub depth_seed: u64,
+    /// The performer's distance from the sensor at the clip's first frame, metres.
+    pub distance_m: f32,
     /// Offscreen image size for headless rendering.
     pub image_size: UVec2,
     /// Replay the motion through the Kinect v1 noise model with this seed (`None`: clean).
@@ -95,10 +104,18 @@ impl AppOptions {
             || assets.join(assets::DEFAULT_MOTION),
             |clip| assets.join(clip),
         );
+        let sensor = match config.sensor_spec()? {
+            // The clip, resolved against the assets folder.
+            sensors::SensorSpec::Bvh(_) => sensors::SensorSpec::Bvh(motion.clone()),
+            other => other,
+        };
         Ok(Self {
             mode,
             body: assets.join(assets::DEFAULT_BODY),
+            sensor,
             motion,
+            depth_seed: 1,
+            distance_m: BvhSourceOptions::default().start_distance_m,
             image_size: UVec2::new(960, 720),
             noise_seed: None,
             shape: None,
@@ -128,7 +145,11 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     let body_load_ms = load_start.elapsed().as_secs_f64() * 1e3;
     let clip = BvhClip::load(&options.motion)
         .with_context(|| format!("cannot load the motion '{}'", options.motion.display()))?;
-    let source = BvhSource::from_clip(clip, BvhSourceOptions::default())
+    let source_options = BvhSourceOptions {
+        start_distance_m: options.distance_m,
+        ..BvhSourceOptions::default()
+    };
+    let source = BvhSource::from_clip(clip, source_options)
         .with_context(|| format!("cannot replay '{}'", options.motion.display()))?;
     let model = Arc::new(model);
     let shape = options.shape.clone().unwrap_or_default();
@@ -149,6 +170,9 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     ));
 
     let source_height = source.options().sensor_height_m;
+    let placement = SensorPlacement {
+        sensor_height_m: source_height,
+    };
     let source: Box<dyn SensorSource> = match options.noise_seed {
         Some(seed) => Box::new(NoisySource::new(
             source,
@@ -157,6 +181,22 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         )),
         None => Box::new(source),
     };
+    // A depth-only source has no skeleton until the tracker exists: the avatar holds still.
+    let (skeleton_source, sensor_name) = match &options.sensor {
+        sensors::SensorSpec::Bvh(_) => (Some(source), String::new()),
+        sensors::SensorSpec::Synthetic => (
+            Some(source),
+            format!(
+                "synthetic (ground-truth skeleton of {})",
+                options.motion.display()
+            ),
+        ),
+        other => (
+            None,
+            format!("{} (depth only: no skeleton yet)", other.name()),
+        ),
+    };
+    let depth = sensors::ActiveDepth::open(&options.sensor, &placement, options.depth_seed)?;
     let mut app = App::new();
     // Garments, fabrics and size charts are assets of the garment folder (hot-reloaded):
     // registered before the `AssetPlugin` comes with the default plugins.
@@ -236,11 +276,12 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             shape_path: options.shape_path.clone(),
             ..Default::default()
         })
-        .insert_resource(ActiveSensor(source))
-        .insert_resource(motion)
-        .insert_resource(SensorPlacement {
-            sensor_height_m: source_height,
+        .insert_resource(SensorFeed {
+            source_name: sensor_name,
+            ..default()
         })
+        .insert_resource(motion)
+        .insert_resource(placement)
         .add_plugins((
             SensorPlugin,
             MotionPlugin,
@@ -254,6 +295,9 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             timing::TimingPlugin,
             GarmentPlugin { root: garment_root },
         ))
+        .add_plugins(sensors::DepthPlugin {
+            source_name: options.sensor.name(),
+        })
         .add_plugins(fitroom_body::reload::BodyFilePlugin {
             file: options.body.clone(),
         })
@@ -266,6 +310,12 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             ..Default::default()
         });
 
+    if let Some(source) = skeleton_source {
+        app.insert_resource(ActiveSensor(source));
+    }
+    if let Some(depth) = depth {
+        app.insert_resource(depth);
+    }
     if render {
         app.insert_resource(ClearColor(BACKGROUND))
             .insert_resource(GlobalAmbientLight {
@@ -290,6 +340,9 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     match options.mode {
         Mode::Kiosk { .. } => {
             app.add_plugins((kiosk::ui::OverlayPlugin, body_panel::BodyPanelPlugin));
+            if !matches!(options.sensor, sensors::SensorSpec::Bvh(_)) {
+                app.add_plugins(kiosk::depth_view::DepthViewPlugin);
+            }
         }
         Mode::Design => {
             app.add_plugins((bevy_egui::EguiPlugin::default(), design::DesignPlugin))

@@ -10,7 +10,7 @@ use bevy::{
 };
 
 use super::{BodyArg, Noise};
-use crate::{AppOptions, Mode, build_app, headless};
+use crate::{AppOptions, Mode, build_app, headless, sensors::SensorSpec};
 
 /// What the app loads: configuration, body, motion, shape, garment.
 #[derive(clap::Args, Clone)]
@@ -21,6 +21,11 @@ pub struct Inputs {
     pub config: Option<PathBuf>,
     #[command(flatten)]
     pub body: BodyArg,
+    /// Where frames come from: `bvh:FILE` (a recorded clip), `synthetic` (the synthetic
+    /// Kinect v1 seeing the avatar, which the clip drives), `fakenect:DIR` (a depth
+    /// recording), `kinect` (a Kinect v1 through libfreenect). Default: the configuration's.
+    #[arg(long)]
+    pub sensor: Option<String>,
     /// BVH clip that drives the avatar (default: the embedded assets/motions/walk.bvh).
     #[arg(long)]
     pub motion: Option<PathBuf>,
@@ -28,7 +33,8 @@ pub struct Inputs {
     /// `none`: the clean recording.
     #[arg(long, value_enum, default_value_t = Noise::None)]
     pub noise: Noise,
-    /// Seed of the noise model.
+    /// Seed of the noise models (the skeleton noise of `--noise kinect`, the synthetic depth
+    /// camera).
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// The avatar's body shape (RON, e.g. from `fitroom body fit --out`); the body panel (B)
@@ -126,7 +132,21 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         None => AppOptions::with_defaults(mode.clone())?,
     };
     let body = inputs.body.body.clone().unwrap_or(defaults.body);
-    let motion = inputs.motion.clone().unwrap_or(defaults.motion);
+    let sensor = match &inputs.sensor {
+        Some(spec) => spec
+            .parse::<SensorSpec>()
+            .context("--sensor is not a sensor")?,
+        None => defaults.sensor,
+    };
+    let motion = match (&inputs.motion, &sensor) {
+        (Some(motion), _) => motion.clone(),
+        (None, SensorSpec::Bvh(clip)) => clip.clone(),
+        (None, _) => defaults.motion,
+    };
+    let sensor = match sensor {
+        SensorSpec::Bvh(_) => SensorSpec::Bvh(motion.clone()),
+        other => other,
+    };
     let noise_seed = match inputs.noise {
         Noise::None => None,
         Noise::Kinect => Some(inputs.seed),
@@ -146,7 +166,10 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
     Ok(AppOptions {
         mode,
         body,
+        sensor,
         motion,
+        depth_seed: inputs.seed,
+        distance_m: defaults.distance_m,
         image_size: UVec2::new(960, 720),
         noise_seed,
         shape,

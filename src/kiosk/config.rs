@@ -48,8 +48,10 @@ pub fn register_config_source(app: &mut App, config: &Path) {
 #[derive(Asset, TypePath, Debug, Clone, PartialEq, Deserialize)]
 #[serde(rename = "KioskConfig", deny_unknown_fields)]
 pub struct KioskConfig {
-    /// Where skeleton frames come from: `bvh:FILE`, a recorded clip replayed as a Kinect v1
-    /// stream (FILE relative to `assets/`, or absolute).
+    /// Where frames come from: `bvh:FILE`, a recorded clip replayed as a Kinect v1 skeleton
+    /// stream (FILE relative to `assets/`, or absolute); `synthetic`, the synthetic Kinect v1
+    /// seeing the avatar; `fakenect:DIR`, a depth recording; `kinect`, a Kinect v1 through
+    /// libfreenect.
     pub sensor: String,
     pub timings: TimingsConfig,
     /// The garments offered, in order; the first is worn by default.
@@ -169,15 +171,8 @@ impl KioskConfig {
                 ));
             }
         }
-        if config.sensor_clip().is_none() {
-            return Err(invalid(
-                "sensor",
-                "sensor",
-                format!(
-                    "\"{}\" is not a sensor; give `bvh:FILE` (a recorded clip)",
-                    config.sensor
-                ),
-            ));
+        if let Err(error) = config.sensor.parse::<crate::sensors::SensorSpec>() {
+            return Err(invalid("sensor", "sensor", error.to_string()));
         }
         if let Some(g) = config
             .garments
@@ -194,6 +189,11 @@ impl KioskConfig {
             ));
         }
         Ok(config)
+    }
+
+    /// The sensor, parsed (checked when the configuration was read).
+    pub fn sensor_spec(&self) -> anyhow::Result<crate::sensors::SensorSpec> {
+        self.sensor.parse()
     }
 
     /// The clip of a `bvh:FILE` sensor.

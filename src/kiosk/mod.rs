@@ -290,4 +290,5 @@ pub fn snap_camera(world: &mut World) {
 }
 
 pub mod config;
+pub mod depth_view;
 pub mod ui;

@@ -1,0 +1,132 @@
+//! What the synthetic depth camera sees of the app's world, in sensor space: the room, the
+//! posed and shaped avatar's skin, and the garment it wears; and the frame's ground truth
+//! (the avatar's 20 Kinect joints and which pixels see body and garment).
+
+use bevy::prelude::*;
+use fitroom_body::plugin::{AvatarBody, AvatarJoint, SensorPlacement, world_skin};
+use fitroom_depth::synthetic::{Label, Scene, SceneMesh, SyntheticFrame};
+use fitroom_depth::truth::{FrameTruth, runs_of};
+use fitroom_garment::plugin::WornGarment;
+use fitroom_sensor::KinectJoint;
+use glam::Affine3A;
+
+/// The back wall's distance from the sensor, metres (inside the 4 m range, so the camera
+/// sees it).
+pub const WALL_Z_M: f32 = 3.6;
+
+/// The room the avatar stands in: floor and back wall, sensor space.
+pub fn room(placement: &SensorPlacement) -> Scene {
+    Scene::room(-placement.sensor_height_m, WALL_Z_M)
+}
+
+/// World to sensor space.
+fn world_to_sensor(placement: &SensorPlacement) -> Affine3A {
+    placement.sensor_to_world().compute_affine().inverse()
+}
+
+/// The avatar's skin and its garment, sensor space (`None` before the body is loaded).
+pub fn avatar_meshes(world: &mut World) -> Option<Vec<SceneMesh>> {
+    let to_sensor = world_to_sensor(world.get_resource::<SensorPlacement>()?);
+    let body = world.get_resource::<AvatarBody>()?.clone();
+    let mut joints = world.query::<(&AvatarJoint, &GlobalTransform)>();
+    let skin = world_skin(&body, joints.iter(world));
+    let mut meshes = vec![SceneMesh {
+        positions: skin
+            .iter()
+            .map(|&p| to_sensor.transform_point3(p))
+            .collect(),
+        triangles: body.model.triangles.clone(),
+        label: Label::Body,
+        closed: true,
+    }];
+    let mut garments = world.query::<&WornGarment>();
+    for garment in garments.iter(world) {
+        let (positions, _) = garment.surface();
+        if positions.is_empty() {
+            continue;
+        }
+        meshes.push(SceneMesh {
+            positions: positions
+                .iter()
+                .map(|&p| to_sensor.transform_point3(p))
+                .collect(),
+            triangles: garment.triangles().to_vec(),
+            label: Label::Garment,
+            closed: false,
+        });
+    }
+    Some(meshes)
+}
+
+/// The avatar bone whose head is at each Kinect joint (MakeHuman's `game_engine` rig; `_l`
+/// is the person's left, as the Kinect's `Left`), and for the head, how far above the bone's
+/// head (at the skull's base) the Kinect's head joint (the head's centre) sits, metres.
+const JOINT_BONES: [(KinectJoint, &str); 20] = [
+    (KinectJoint::HipCenter, "pelvis"),
+    (KinectJoint::Spine, "spine_02"),
+    (KinectJoint::ShoulderCenter, "neck_01"),
+    (KinectJoint::Head, "head"),
+    (KinectJoint::ShoulderLeft, "upperarm_l"),
+    (KinectJoint::ElbowLeft, "lowerarm_l"),
+    (KinectJoint::WristLeft, "hand_l"),
+    (KinectJoint::HandLeft, "middle_01_l"),
+    (KinectJoint::ShoulderRight, "upperarm_r"),
+    (KinectJoint::ElbowRight, "lowerarm_r"),
+    (KinectJoint::WristRight, "hand_r"),
+    (KinectJoint::HandRight, "middle_01_r"),
+    (KinectJoint::HipLeft, "thigh_l"),
+    (KinectJoint::KneeLeft, "calf_l"),
+    (KinectJoint::AnkleLeft, "foot_l"),
+    (KinectJoint::FootLeft, "ball_l"),
+    (KinectJoint::HipRight, "thigh_r"),
+    (KinectJoint::KneeRight, "calf_r"),
+    (KinectJoint::AnkleRight, "foot_r"),
+    (KinectJoint::FootRight, "ball_r"),
+];
+const HEAD_ABOVE_SKULL_BASE_M: f32 = 0.09;
+
+/// The avatar's 20 Kinect joints, sensor space, in [`KinectJoint::ALL`] order (`None`
+/// before its joints exist or when the rig lacks one).
+pub fn avatar_kinect_joints(world: &mut World) -> Option<Vec<Vec3>> {
+    let to_sensor = world_to_sensor(world.get_resource::<SensorPlacement>()?);
+    let mut query = world.query::<(&AvatarJoint, &Name, &GlobalTransform)>();
+    let by_name: std::collections::HashMap<&str, Vec3> = query
+        .iter(world)
+        .map(|(_, name, t)| (name.as_str(), t.translation()))
+        .collect();
+    let mut out = Vec::with_capacity(20);
+    for (joint, bone) in JOINT_BONES {
+        let mut p = *by_name.get(bone)?;
+        if joint == KinectJoint::Head {
+            let neck = *by_name.get("neck_01")?;
+            p += (p - neck).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
+        }
+        out.push(to_sensor.transform_point3(p));
+    }
+    Some(out)
+}
+
+/// The ground truth of `frame`, the `index`-th of its stream, with the avatar's joints.
+pub fn frame_truth(index: usize, frame: &SyntheticFrame, joints: &[Vec3]) -> FrameTruth {
+    FrameTruth {
+        frame: index,
+        time_s: frame.frame.time_s,
+        timestamp: frame.frame.timestamp,
+        joints: joints.iter().map(|p| p.to_array()).collect(),
+        body_runs: runs_of(&frame.labels, Label::Body as u8),
+        garment_runs: runs_of(&frame.labels, Label::Garment as u8),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_joint_table_is_in_kinect_order() {
+        for (i, (joint, _)) in JOINT_BONES.iter().enumerate() {
+            assert_eq!(joint.index(), i);
+            assert_eq!(joint.name(), fitroom_depth::truth::JOINT_NAMES[i]);
+        }
+    }
+}

@@ -1,0 +1,137 @@
+//! The picture-in-picture depth view: the newest depth frame, colour-mapped (near warm, far
+//! cool, black where the sensor has no reading), in the screen's bottom-right corner with
+//! its source and state. Shown or hidden with its button (and the P key); a depth source's
+//! error (a vanished Kinect, an unreadable frame) is written under the last good frame.
+
+use bevy::asset::RenderAssetUsages;
+use bevy::prelude::*;
+use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
+use bevy_egui::{EguiContexts, EguiPrimaryContextPass, EguiTextureHandle, egui};
+use fitroom_depth::plugin::DepthFeed;
+use fitroom_depth::{HEIGHT, WIDTH};
+
+/// Whether the view is shown, and its image: one Bevy image written in place per depth
+/// frame (an egui-managed texture set every frame is a new GPU texture every frame, never
+/// ready when the overlay is drawn).
+#[derive(Resource)]
+pub struct DepthView {
+    pub shown: bool,
+    image: Option<(Handle<Image>, egui::TextureId)>,
+    /// The feed's frame count when the image was last written.
+    shown_frame: u64,
+    rgb: Vec<u8>,
+}
+
+impl Default for DepthView {
+    fn default() -> Self {
+        Self {
+            shown: true,
+            image: None,
+            shown_frame: u64::MAX,
+            rgb: Vec::new(),
+        }
+    }
+}
+
+/// The depths the colours span, millimetres: the camera's range.
+const NEAR_MM: u16 = 800;
+const FAR_MM: u16 = 4000;
+
+pub struct DepthViewPlugin;
+
+impl Plugin for DepthViewPlugin {
+    fn build(&self, app: &mut App) {
+        app.init_resource::<DepthView>()
+            .add_systems(Update, toggle_with_key)
+            .add_systems(EguiPrimaryContextPass, depth_view);
+    }
+}
+
+fn toggle_with_key(keys: Option<Res<ButtonInput<KeyCode>>>, mut view: ResMut<DepthView>) {
+    if keys.is_some_and(|k| k.just_pressed(KeyCode::KeyP)) {
+        view.shown = !view.shown;
+    }
+}
+
+fn depth_view(
+    mut contexts: EguiContexts,
+    feed: Option<Res<DepthFeed>>,
+    mut view: ResMut<DepthView>,
+    mut images: ResMut<Assets<Image>>,
+) -> Result {
+    let Some(feed) = feed else { return Ok(()) };
+    if view.shown
+        && view.shown_frame != feed.frames_received
+        && let Some(frame) = &feed.latest
+    {
+        let view = &mut *view;
+        fitroom_depth::colour::colourise(&frame.depth_mm, NEAR_MM, FAR_MM, &mut view.rgb);
+        let rgba: Vec<u8> = view
+            .rgb
+            .chunks_exact(3)
+            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .collect();
+        let current = view.image.as_ref().map(|(handle, _)| handle.clone());
+        let exists = current.as_ref().is_some_and(|h| images.contains(h));
+        match current {
+            Some(handle) if exists => {
+                if let Some(mut image) = images.get_mut(&handle) {
+                    image.data = Some(rgba);
+                }
+            }
+            _ => {
+                let image = Image::new(
+                    Extent3d {
+                        width: WIDTH as u32,
+                        height: HEIGHT as u32,
+                        depth_or_array_layers: 1,
+                    },
+                    TextureDimension::D2,
+                    rgba,
+                    TextureFormat::Rgba8UnormSrgb,
+                    RenderAssetUsages::default(),
+                );
+                let handle = images.add(image);
+                let id = contexts.add_image(EguiTextureHandle::Strong(handle.clone()));
+                view.image = Some((handle, id));
+            }
+        }
+        view.shown_frame = feed.frames_received;
+    }
+    let texture = view.image.as_ref().map(|(_, id)| *id);
+    let ctx = contexts.ctx_mut()?;
+    egui::Area::new(egui::Id::new("depth-view"))
+        .anchor(egui::Align2::RIGHT_BOTTOM, egui::vec2(-16.0, -16.0))
+        .show(ctx, |ui| {
+            egui::Frame::popup(ui.style()).show(ui, |ui| {
+                ui.horizontal(|ui| {
+                    let label = if view.shown {
+                        "hide depth"
+                    } else {
+                        "show depth"
+                    };
+                    if ui.button(label).clicked() {
+                        view.shown = !view.shown;
+                    }
+                    ui.label(format!(
+                        "depth: {} ({} frames)",
+                        feed.source_name, feed.frames_received
+                    ));
+                });
+                if view.shown {
+                    match texture {
+                        Some(texture) => {
+                            ui.image((texture, egui::vec2(320.0, 240.0)));
+                        }
+                        None => {
+                            ui.label("waiting for the first depth frame…");
+                        }
+                    }
+                }
+                if let Some(error) = &feed.error {
+                    ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);
+                }
+            });
+        });
+    Ok(())
+}

@@ -1,0 +1,242 @@
+//! Where the kiosk's frames come from (`--sensor`, or `sensor` in the kiosk configuration),
+//! and the depth stream's systems:
+//!
+//! - `bvh:FILE`: a recorded clip replayed as a skeleton stream; no depth.
+//! - `synthetic`: the clip drives the avatar, and the synthetic Kinect v1 sees the avatar
+//!   and its garment in a room; the clip's skeleton is passed on, labelled ground truth,
+//!   until the tracker exists.
+//! - `fakenect:DIR`: a fakenect recording played in pure Rust at its pace, looping; its
+//!   ground-truth skeleton drives the avatar when the recording has one.
+//! - `kinect`: a Kinect v1 through libfreenect (`LD_LIBRARY_PATH` naming Debian's fakenect
+//!   folder replays a recording through the same library); depth only until the tracker
+//!   exists.
+//!
+//! A depth source that fails (a vanished device, an unreadable frame) never stops the app:
+//! the last good frame stays in [`DepthFeed`] and its error is shown.
+
+use std::path::PathBuf;
+use std::str::FromStr;
+
+use anyhow::{Context, Result, bail};
+use bevy::prelude::*;
+use fitroom_body::plugin::SensorPlacement;
+use fitroom_depth::DepthCamera;
+use fitroom_depth::player::Player;
+use fitroom_depth::plugin::DepthFeed;
+use fitroom_depth::synthetic::{NoiseSettings, Scene, SyntheticCamera};
+use fitroom_freenect::{KinectOptions, KinectSource, SourceStatus};
+use fitroom_sensor::plugin::SensorFeed;
+
+use crate::depth_scene;
+
+/// A sensor, as `--sensor` and the kiosk configuration name it.
+#[derive(Clone, Debug, PartialEq)]
+pub enum SensorSpec {
+    Bvh(PathBuf),
+    Synthetic,
+    Fakenect(PathBuf),
+    Kinect,
+}
+
+/// The forms a sensor is given in, for error messages.
+pub const SENSOR_FORMS: &str = "`bvh:FILE` (a recorded clip), `synthetic` (the synthetic Kinect v1 seeing the avatar), `fakenect:DIR` (a depth recording) or `kinect` (a Kinect v1 through libfreenect)";
+
+impl FromStr for SensorSpec {
+    type Err = anyhow::Error;
+
+    fn from_str(s: &str) -> Result<Self> {
+        let s = s.trim();
+        let non_empty = |rest: &str, what: &str| {
+            if rest.is_empty() {
+                bail!("\"{s}\" names no {what}; sensors are {SENSOR_FORMS}")
+            }
+            Ok(PathBuf::from(rest))
+        };
+        Ok(match s {
+            "synthetic" => Self::Synthetic,
+            "kinect" => Self::Kinect,
+            _ if s.starts_with("bvh:") => Self::Bvh(non_empty(&s[4..], "clip")?),
+            _ if s.starts_with("fakenect:") => Self::Fakenect(non_empty(&s[9..], "folder")?),
+            _ => bail!("\"{s}\" is not a sensor; sensors are {SENSOR_FORMS}"),
+        })
+    }
+}
+
+impl SensorSpec {
+    /// The name shown on screen.
+    pub fn name(&self) -> String {
+        match self {
+            Self::Bvh(path) => format!("bvh:{}", path.display()),
+            Self::Synthetic => "synthetic".into(),
+            Self::Fakenect(dir) => format!("fakenect:{}", dir.display()),
+            Self::Kinect => "kinect".into(),
+        }
+    }
+}
+
+/// The depth source of the running app.
+#[derive(Resource)]
+pub enum ActiveDepth {
+    /// Renders the avatar after each new skeleton frame.
+    Synthetic {
+        camera: Box<SyntheticCamera>,
+        room: Scene,
+        rendered: u64,
+    },
+    Recording(Box<Player>),
+    Kinect(Box<KinectSource>),
+}
+
+impl ActiveDepth {
+    /// The depth source of `spec` (`None` for a source without depth).
+    pub fn open(spec: &SensorSpec, placement: &SensorPlacement, seed: u64) -> Result<Option<Self>> {
+        let camera = DepthCamera::default();
+        Ok(match spec {
+            SensorSpec::Bvh(_) => None,
+            SensorSpec::Synthetic => Some(Self::Synthetic {
+                camera: Box::new(SyntheticCamera::new(camera, NoiseSettings::default(), seed)),
+                room: depth_scene::room(placement),
+                rendered: 0,
+            }),
+            SensorSpec::Fakenect(dir) => Some(Self::Recording(Box::new(
+                Player::open(dir, camera)
+                    .with_context(|| format!("cannot play the recording '{}'", dir.display()))?,
+            ))),
+            SensorSpec::Kinect => Some(Self::Kinect(Box::new(
+                KinectSource::open(KinectOptions {
+                    camera,
+                    ..KinectOptions::default()
+                })
+                .context("cannot use a Kinect")?,
+            ))),
+        })
+    }
+}
+
+/// Adds the depth stream: [`DepthFeed`], and the system of the active depth source.
+pub struct DepthPlugin {
+    pub source_name: String,
+}
+
+impl Plugin for DepthPlugin {
+    fn build(&self, app: &mut App) {
+        app.insert_resource(DepthFeed {
+            source_name: self.source_name.clone(),
+            ..default()
+        })
+        .add_systems(
+            PostUpdate,
+            poll_depth.in_set(fitroom_schedule::FitroomSystems::Sensor),
+        )
+        // After everything has moved: the avatar's joints propagated, the garment stepped.
+        .add_systems(Last, render_synthetic_depth);
+    }
+}
+
+/// Reads a recording or a Kinect.
+fn poll_depth(
+    time: Res<Time>,
+    depth: Option<ResMut<ActiveDepth>>,
+    mut feed: ResMut<DepthFeed>,
+    mut warned: Local<Option<String>>,
+) {
+    let Some(mut depth) = depth else { return };
+    let mut report = |feed: &mut DepthFeed, error: String| {
+        // Logged once until another error comes (a looping recording meets the same one
+        // every pass); the screen shows it while it lasts.
+        if warned.as_deref() != Some(error.as_str()) {
+            warn!("depth: {error}");
+            *warned = Some(error.clone());
+        }
+        feed.error = Some(error);
+    };
+    match depth.as_mut() {
+        ActiveDepth::Synthetic { .. } => {}
+        ActiveDepth::Recording(player) => match player.advance(time.delta_secs_f64()) {
+            Ok(delivered) => {
+                if let Some((_, frame)) = delivered.frame {
+                    feed.publish(frame, None);
+                }
+            }
+            Err(error) => report(&mut feed, error.to_string()),
+        },
+        ActiveDepth::Kinect(kinect) => {
+            if let Some(frame) = kinect.try_latest() {
+                feed.publish(frame, None);
+            }
+            match kinect.status() {
+                SourceStatus::Disconnected { reason } => {
+                    report(&mut feed, format!("Kinect disconnected: {reason}"));
+                }
+                SourceStatus::Ended => report(&mut feed, "the Kinect stream ended".into()),
+                SourceStatus::Connecting | SourceStatus::Streaming => {}
+            }
+        }
+    }
+}
+
+/// The synthetic camera sees the avatar once per skeleton frame the sensor delivered.
+fn render_synthetic_depth(world: &mut World) {
+    let delivered = world
+        .get_resource::<SensorFeed>()
+        .map_or(0, |f| f.frames_received);
+    let Some(mut active) = world.remove_resource::<ActiveDepth>() else {
+        return;
+    };
+    if let ActiveDepth::Synthetic {
+        camera,
+        room,
+        rendered,
+    } = &mut active
+        && delivered > *rendered
+    {
+        *rendered = delivered;
+        if let Some(meshes) = depth_scene::avatar_meshes(world) {
+            let joints = depth_scene::avatar_kinect_joints(world);
+            let mut scene = room.clone();
+            scene.meshes.extend(meshes);
+            let time_s = world
+                .get_resource::<Time>()
+                .map_or(0.0, |t| t.elapsed_secs_f64());
+            let index = world
+                .get_resource::<DepthFeed>()
+                .map_or(0, |f| f.frames_received as usize);
+            let frame = camera.render(&scene, time_s);
+            let truth = joints.map(|j| depth_scene::frame_truth(index, &frame, &j));
+            if let Some(mut feed) = world.get_resource_mut::<DepthFeed>() {
+                feed.labels = Some(frame.labels.clone());
+                feed.publish(frame.frame, truth);
+            }
+        }
+    }
+    world.insert_resource(active);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sensors_parse_and_bad_ones_are_explained() {
+        assert_eq!(
+            "bvh:motions/walk.bvh".parse::<SensorSpec>().expect("valid"),
+            SensorSpec::Bvh("motions/walk.bvh".into())
+        );
+        assert_eq!(
+            "fakenect:/tmp/rec".parse::<SensorSpec>().expect("valid"),
+            SensorSpec::Fakenect("/tmp/rec".into())
+        );
+        assert_eq!(
+            "kinect".parse::<SensorSpec>().expect("valid"),
+            SensorSpec::Kinect
+        );
+        assert_eq!(
+            " synthetic ".parse::<SensorSpec>().expect("valid"),
+            SensorSpec::Synthetic
+        );
+        for bad in ["fakenect:", "bvh:", "kinekt", ""] {
+            let message = bad.parse::<SensorSpec>().expect_err(bad).to_string();
+            assert!(message.contains("fakenect:DIR"), "{message}");
+        }
+    }
+}

@@ -1,0 +1,236 @@
+//! The depth camera in the product: a synthetic recording made by the command line carries
+//! ground truth that agrees with its own depth; the headless app plays a recording and keeps
+//! going when a frame of it is lost; a Kinect that is not there is reported, and the app
+//! keeps going.
+
+use std::path::{Path, PathBuf};
+use std::process::Command;
+use std::time::{Duration, Instant};
+
+use fitroom::sensors::SensorSpec;
+use fitroom::{AppOptions, Mode, headless};
+use fitroom_depth::fakenect::{Recording, RecordingWriter};
+use fitroom_depth::plugin::DepthFeed;
+use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SyntheticCamera};
+use fitroom_depth::truth::{FrameTruth, read_truth};
+use fitroom_depth::{DepthCamera, WIDTH};
+use glam::Vec3;
+
+struct Scratch(PathBuf);
+
+impl Scratch {
+    fn new(name: &str) -> Self {
+        let dir = std::env::temp_dir().join(format!("fitroom-{name}-{}", std::process::id()));
+        let _ = std::fs::remove_dir_all(&dir);
+        Self(dir)
+    }
+}
+
+impl Drop for Scratch {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_dir_all(&self.0);
+    }
+}
+
+fn fitroom() -> Command {
+    Command::new(env!("CARGO_BIN_EXE_fitroom"))
+}
+
+/// The median reading (metres) of the 7x7 pixels around `(u, v)` that see the avatar.
+fn depth_near(depth_mm: &[u16], mask: &[bool], u: i32, v: i32) -> Option<f32> {
+    let mut values = Vec::new();
+    for dv in -3..=3 {
+        for du in -3..=3 {
+            let (x, y) = (u + du, v + dv);
+            if !(0..640).contains(&x) || !(0..480).contains(&y) {
+                continue;
+            }
+            let k = y as usize * WIDTH + x as usize;
+            if mask[k] && depth_mm[k] > 0 {
+                values.push(f32::from(depth_mm[k]) / 1000.0);
+            }
+        }
+    }
+    values.sort_by(f32::total_cmp);
+    values.get(values.len() / 2).copied()
+}
+
+#[test]
+fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
+    let scratch = Scratch::new("synthetic-recording");
+    let out = fitroom()
+        .args([
+            "sensor",
+            "record",
+            "--synthetic",
+            "--frames",
+            "12",
+            "--seed",
+            "3",
+        ])
+        .args(["--garment", "assets/garments/sundress.ron"])
+        .arg("--motion")
+        .arg(fitroom_testdata::clip_path("141_16.bvh"))
+        .arg("--out")
+        .arg(&scratch.0)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("fitroom runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("a JSON report");
+    assert_eq!(report["depth_frames"].as_u64(), Some(12));
+
+    let recording = Recording::open(&scratch.0).expect("a fakenect recording");
+    assert_eq!(recording.depth_count(), 12);
+    let truth = read_truth(&scratch.0)
+        .expect("readable")
+        .expect("ground truth");
+    assert_eq!(truth.len(), 12);
+    let camera = DepthCamera::default();
+    for (k, (entry, t)) in recording.depth_entries().zip(&truth).enumerate() {
+        assert_eq!(t.frame, k);
+        let frame = recording.read_depth(entry, camera).expect("a frame");
+        let body = FrameTruth::mask(&t.body_runs);
+        let garment = FrameTruth::mask(&t.garment_runs);
+        let avatar: Vec<bool> = body.iter().zip(&garment).map(|(b, g)| *b || *g).collect();
+        let seen = avatar.iter().filter(|&&a| a).count();
+        assert!(seen > 10_000, "frame {k}: {seen} avatar pixels");
+        assert!(garment.iter().any(|&g| g), "frame {k}: the dress is seen");
+        // The trunk's joints lie inside the avatar: each projects onto its pixels, behind
+        // the surface the camera reads there by less than a body's depth.
+        for joint in [0usize, 1, 2, 3] {
+            let p = Vec3::from_array(t.joints[joint]);
+            let uv = camera.project(p).expect("in front of the camera");
+            let (u, v) = (uv.x.round() as i32, uv.y.round() as i32);
+            let surface = depth_near(&frame.depth_mm, &avatar, u, v)
+                .unwrap_or_else(|| panic!("frame {k}: no avatar reading at joint {joint}"));
+            let behind = p.z - surface;
+            assert!(
+                (0.0..0.25).contains(&behind),
+                "frame {k}: joint {joint} at {:.3} m, surface at {surface:.3} m",
+                p.z
+            );
+        }
+    }
+
+    let body: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(scratch.0.join("body.json")).expect("body.json"),
+    )
+    .expect("JSON");
+    let stature = body["measurements_cm"]["stature_cm"]
+        .as_f64()
+        .expect("stature");
+    assert!((150.0..200.0).contains(&stature), "{stature}");
+
+    let out = fitroom()
+        .args(["sensor", "inspect", "--json"])
+        .arg(&scratch.0)
+        .output()
+        .expect("fitroom runs");
+    assert!(out.status.success());
+    let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(summary["depth_frames"].as_u64(), Some(12));
+    assert_eq!(summary["ground_truth_lines"].as_u64(), Some(12));
+    assert!((summary["fps"].as_f64().expect("fps") - 30.0).abs() < 0.5);
+}
+
+/// Six frames of a box moving before a wall.
+fn box_recording(dir: &Path) -> Vec<Vec<u16>> {
+    let mut writer = RecordingWriter::create(dir).expect("scratch folder");
+    let mut camera = SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), 9);
+    let mut frames = Vec::new();
+    for k in 0..6 {
+        let mut scene = Scene::room(-0.8, 3.6);
+        scene.add_box(
+            Vec3::new(-0.3 + 0.1 * k as f32, 0.0, 2.0),
+            Vec3::new(0.2, 0.5, 0.15),
+            Label::Other,
+        );
+        let frame = camera.render(&scene, k as f64 / 30.0);
+        let raw = frame.frame.raw.expect("raw values").to_vec();
+        writer
+            .write_depth(k as f64 / 30.0, k, &raw)
+            .expect("written");
+        frames.push(raw);
+    }
+    frames
+}
+
+fn depth_app(sensor: SensorSpec) -> bevy::app::App {
+    let mut options =
+        AppOptions::with_defaults(Mode::Headless { render: false }).expect("defaults");
+    options.sensor = sensor;
+    headless::headless_app(&options).expect("the app builds")
+}
+
+#[test]
+fn the_app_plays_a_recording_and_goes_on_past_a_lost_frame() {
+    let scratch = Scratch::new("depth-playback");
+    let frames = box_recording(&scratch.0);
+    let mut app = depth_app(SensorSpec::Fakenect(scratch.0.clone()));
+    // 0.4 s of play: the six frames (0.2 s) and part of the second pass.
+    for _ in 0..24 {
+        app.update();
+        let feed = app.world().resource::<DepthFeed>();
+        assert!(feed.error.is_none(), "{:?}", feed.error);
+        if let Some(latest) = &feed.latest {
+            let raw = latest.raw.as_ref().expect("raw values");
+            assert!(
+                frames.iter().any(|f| f[..] == raw[..]),
+                "a frame of the recording, bit for bit"
+            );
+        }
+    }
+    let played = app.world().resource::<DepthFeed>().frames_received;
+    assert!(played >= 8, "{played} frames in 0.4 s at 30 Hz");
+
+    // A frame's file vanishes: its turn is reported, naming the file, and play goes on.
+    let recording = Recording::open(&scratch.0).expect("reads");
+    let lost = recording
+        .depth_entries()
+        .nth(3)
+        .expect("frame 3")
+        .file
+        .clone();
+    std::fs::remove_file(scratch.0.join(&lost)).expect("removed");
+    let mut reported = false;
+    for _ in 0..60 {
+        app.update();
+        let feed = app.world().resource::<DepthFeed>();
+        reported |= feed.error.as_deref().is_some_and(|e| e.contains(&lost));
+    }
+    assert!(reported, "the lost frame {lost} was not reported");
+    let feed = app.world().resource::<DepthFeed>();
+    assert!(feed.frames_received > played + 20, "play went on");
+}
+
+#[test]
+fn a_kinect_that_is_not_there_is_reported_and_the_app_goes_on() {
+    // libfreenect itself (scripts/deps.sh installs it) with no device on this machine.
+    let mut app = depth_app(SensorSpec::Kinect);
+    let start = Instant::now();
+    let mut error = None;
+    while start.elapsed() < Duration::from_secs(3) {
+        app.update();
+        error = app.world().resource::<DepthFeed>().error.clone();
+        if error.is_some() {
+            break;
+        }
+        std::thread::sleep(Duration::from_millis(10));
+    }
+    let error = error.expect("no report within 3 s");
+    assert!(error.contains("Kinect disconnected"), "{error}");
+    assert!(
+        start.elapsed() < Duration::from_secs(2),
+        "reported after {:?}",
+        start.elapsed()
+    );
+    for _ in 0..30 {
+        app.update();
+    }
+    assert!(app.world().resource::<DepthFeed>().latest.is_none());
+}
