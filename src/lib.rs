@@ -68,6 +68,8 @@ pub struct AppOptions {
     pub depth_seed: u64,
     /// The performer's distance from the sensor at the clip's first frame, metres.
     pub distance_m: f32,
+    /// How a `fakenect:DIR` recording is played.
+    pub replay: sensors::Replay,
     /// Offscreen image size for headless rendering.
     pub image_size: UVec2,
     /// Replay the motion through the Kinect v1 noise model with this seed (`None`: clean).
@@ -116,6 +118,7 @@ impl AppOptions {
             motion,
             depth_seed: 1,
             distance_m: BvhSourceOptions::default().start_distance_m,
+            replay: sensors::Replay::default(),
             image_size: UVec2::new(960, 720),
             noise_seed: None,
             shape: None,
@@ -196,7 +199,12 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             format!("{} (depth only: no skeleton yet)", other.name()),
         ),
     };
-    let depth = sensors::ActiveDepth::open(&options.sensor, &placement, options.depth_seed)?;
+    let depth = sensors::ActiveDepth::open(
+        &options.sensor,
+        &placement,
+        options.depth_seed,
+        options.replay,
+    )?;
     let mut app = App::new();
     // Garments, fabrics and size charts are assets of the garment folder (hot-reloaded):
     // registered before the `AssetPlugin` comes with the default plugins.

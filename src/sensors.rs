@@ -24,6 +24,7 @@ use fitroom_depth::DepthCamera;
 use fitroom_depth::player::Player;
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_depth::synthetic::{NoiseSettings, Scene, SyntheticCamera};
+use fitroom_depth::truth::{FrameTruth, read_truth};
 use fitroom_freenect::{KinectOptions, KinectSource, SourceStatus};
 use fitroom_sensor::plugin::SensorFeed;
 
@@ -74,6 +75,22 @@ impl SensorSpec {
     }
 }
 
+/// How a recording is played: its pace (1 = as recorded) and whether it loops.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Replay {
+    pub speed: f64,
+    pub looping: bool,
+}
+
+impl Default for Replay {
+    fn default() -> Self {
+        Self {
+            speed: 1.0,
+            looping: true,
+        }
+    }
+}
+
 /// The depth source of the running app.
 #[derive(Resource)]
 pub enum ActiveDepth {
@@ -83,13 +100,19 @@ pub enum ActiveDepth {
         room: Scene,
         rendered: u64,
     },
-    Recording(Box<Player>),
+    /// A recording, with its ground truth when it has one.
+    Recording(Box<Player>, Option<Vec<FrameTruth>>),
     Kinect(Box<KinectSource>),
 }
 
 impl ActiveDepth {
     /// The depth source of `spec` (`None` for a source without depth).
-    pub fn open(spec: &SensorSpec, placement: &SensorPlacement, seed: u64) -> Result<Option<Self>> {
+    pub fn open(
+        spec: &SensorSpec,
+        placement: &SensorPlacement,
+        seed: u64,
+        replay: Replay,
+    ) -> Result<Option<Self>> {
         let camera = DepthCamera::default();
         Ok(match spec {
             SensorSpec::Bvh(_) => None,
@@ -98,10 +121,16 @@ impl ActiveDepth {
                 room: depth_scene::room(placement),
                 rendered: 0,
             }),
-            SensorSpec::Fakenect(dir) => Some(Self::Recording(Box::new(
-                Player::open(dir, camera)
-                    .with_context(|| format!("cannot play the recording '{}'", dir.display()))?,
-            ))),
+            SensorSpec::Fakenect(dir) => {
+                let mut player = Player::open(dir, camera)
+                    .with_context(|| format!("cannot play the recording '{}'", dir.display()))?;
+                player.speed = replay.speed;
+                player.looping = replay.looping;
+                let truth = read_truth(dir).with_context(|| {
+                    format!("cannot read the ground truth of '{}'", dir.display())
+                })?;
+                Some(Self::Recording(Box::new(player), truth))
+            }
             SensorSpec::Kinect => Some(Self::Kinect(Box::new(
                 KinectSource::open(KinectOptions {
                     camera,
@@ -111,6 +140,13 @@ impl ActiveDepth {
             ))),
         })
     }
+}
+
+/// Systems of the depth stream.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub enum DepthSystems {
+    /// Reads a recording or a Kinect (in the `Sensor` stage).
+    Poll,
 }
 
 /// Adds the depth stream: [`DepthFeed`], and the system of the active depth source.
@@ -124,12 +160,13 @@ impl Plugin for DepthPlugin {
             source_name: self.source_name.clone(),
             ..default()
         })
-        .add_systems(
+        .configure_sets(
             PostUpdate,
-            poll_depth.in_set(fitroom_schedule::FitroomSystems::Sensor),
+            DepthSystems::Poll.in_set(fitroom_schedule::FitroomSystems::Sensor),
         )
+        .add_systems(PostUpdate, poll_depth.in_set(DepthSystems::Poll))
         // After everything has moved: the avatar's joints propagated, the garment stepped.
-        .add_systems(Last, render_synthetic_depth);
+        .add_systems(Last, render_synthetic_depth.before(crate::timing::FrameEnd));
     }
 }
 
@@ -152,10 +189,13 @@ fn poll_depth(
     };
     match depth.as_mut() {
         ActiveDepth::Synthetic { .. } => {}
-        ActiveDepth::Recording(player) => match player.advance(time.delta_secs_f64()) {
+        ActiveDepth::Recording(player, truth) => match player.advance(time.delta_secs_f64()) {
             Ok(delivered) => {
-                if let Some((_, frame)) = delivered.frame {
-                    feed.publish(frame, None);
+                if let Some((index, frame)) = delivered.frame {
+                    let truth = truth.as_ref().and_then(|t| t.get(index)).cloned();
+                    feed.publish(frame, truth);
+                } else if player.finished() && feed.error.is_none() {
+                    report(&mut feed, "the recording has played out".into());
                 }
             }
             Err(error) => report(&mut feed, error.to_string()),

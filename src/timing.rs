@@ -109,6 +109,10 @@ fn end(stage: Stage) -> impl FnMut(Res<StageTimings>) {
     move |timings| timings.end(stage)
 }
 
+/// The frame's end marker, after everything else in `Last` that is part of the frame's work.
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct FrameEnd;
+
 /// Adds the marker systems: each stage's start marker runs after the previous stage, its end
 /// marker before the next one.
 pub struct TimingPlugin;
@@ -118,7 +122,7 @@ impl Plugin for TimingPlugin {
         fitroom_schedule::ensure(app);
         app.init_resource::<StageTimings>()
             .add_systems(First, begin(Stage::Frame))
-            .add_systems(Last, end(Stage::Frame))
+            .add_systems(Last, end(Stage::Frame).in_set(FrameEnd))
             .add_systems(
                 PostUpdate,
                 (

@@ -136,6 +136,17 @@ fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
     assert_eq!(summary["depth_frames"].as_u64(), Some(12));
     assert_eq!(summary["ground_truth_lines"].as_u64(), Some(12));
     assert!((summary["fps"].as_f64().expect("fps") - 30.0).abs() < 0.5);
+
+    // Played back, each frame comes with its own line of ground truth.
+    let mut app = depth_app(SensorSpec::Fakenect(scratch.0.clone()));
+    for _ in 0..10 {
+        app.update();
+    }
+    let feed = app.world().resource::<DepthFeed>();
+    let latest = feed.latest.as_ref().expect("frames played");
+    let line = feed.truth.as_ref().expect("the recording's ground truth");
+    assert_eq!(truth[line.frame].timestamp, latest.timestamp);
+    assert_eq!(truth[line.frame], *line);
 }
 
 /// Six frames of a box moving before a wall.

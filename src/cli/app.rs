@@ -26,6 +26,12 @@ pub struct Inputs {
     /// recording), `kinect` (a Kinect v1 through libfreenect). Default: the configuration's.
     #[arg(long)]
     pub sensor: Option<String>,
+    /// Play a `fakenect:DIR` recording this many times as fast as it was recorded.
+    #[arg(long, default_value_t = 1.0)]
+    pub replay_speed: f64,
+    /// Play a `fakenect:DIR` recording once instead of looping it.
+    #[arg(long)]
+    pub replay_once: bool,
     /// BVH clip that drives the avatar (default: the embedded assets/motions/walk.bvh).
     #[arg(long)]
     pub motion: Option<PathBuf>,
@@ -132,6 +138,12 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         None => AppOptions::with_defaults(mode.clone())?,
     };
     let body = inputs.body.body.clone().unwrap_or(defaults.body);
+    if !(inputs.replay_speed.is_finite() && inputs.replay_speed > 0.0) {
+        anyhow::bail!(
+            "--replay-speed is {}; give a positive factor (1 = the recorded pace)",
+            inputs.replay_speed
+        );
+    }
     let sensor = match &inputs.sensor {
         Some(spec) => spec
             .parse::<SensorSpec>()
@@ -170,6 +182,10 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         motion,
         depth_seed: inputs.seed,
         distance_m: defaults.distance_m,
+        replay: crate::sensors::Replay {
+            speed: inputs.replay_speed,
+            looping: !inputs.replay_once,
+        },
         image_size: UVec2::new(960, 720),
         noise_seed,
         shape,
