@@ -1,0 +1,202 @@
+//! Person segmentation on synthetic Kinect frames (every part of the error model) of the
+//! MakeHuman body in a room, against the camera's per-pixel ground truth: alone at several
+//! distances, beside a box, with a second person behind, walking past, leaving and coming
+//! back, the sensor tilted; and garbage frames.
+
+use std::path::Path;
+
+use fitroom_body::{BodyModel, MODEL_TO_SENSOR};
+use fitroom_depth::synthetic::{
+    Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, SyntheticFrame,
+};
+use fitroom_depth::{DepthCamera, DepthFrame, PIXELS};
+use fitroom_tracker::{SegmentSettings, Segmenter};
+use glam::{Quat, Vec3};
+
+const SENSOR_HEIGHT: f32 = 0.8;
+
+struct Body {
+    /// Body vertices standing on the floor at the origin, facing the sensor (sensor axes).
+    positions: Vec<Vec3>,
+    triangles: Vec<[u32; 3]>,
+}
+
+fn body() -> Body {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
+    let model = BodyModel::read(&path).expect("the shipped body");
+    let n = model.body_vertex_count as usize;
+    let sole = model.positions[..n]
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min);
+    Body {
+        positions: model.positions[..n]
+            .iter()
+            .map(|&p| MODEL_TO_SENSOR * (p - Vec3::Y * sole))
+            .collect(),
+        triangles: model.triangles.clone(),
+    }
+}
+
+/// The body standing at sensor-space `(x, z)` on the floor.
+fn person(body: &Body, x: f32, z: f32, label: Label) -> SceneMesh {
+    SceneMesh {
+        positions: body
+            .positions
+            .iter()
+            .map(|&p| p + Vec3::new(x, -SENSOR_HEIGHT, z))
+            .collect(),
+        triangles: body.triangles.clone(),
+        label,
+        closed: true,
+    }
+}
+
+fn room() -> Scene {
+    Scene::room(-SENSOR_HEIGHT, 3.9)
+}
+
+/// Precision and recall of `mask` against the pixels that see the body and have a reading.
+fn score(frame: &SyntheticFrame, mask: &[bool]) -> (f32, f32) {
+    let truth: Vec<bool> = (0..PIXELS)
+        .map(|k| frame.labels[k] == Label::Body as u8 && frame.frame.depth_mm[k] > 0)
+        .collect();
+    let both = (0..PIXELS).filter(|&k| mask[k] && truth[k]).count() as f32;
+    let ours = mask.iter().filter(|&&m| m).count() as f32;
+    let theirs = truth.iter().filter(|&&t| t).count() as f32;
+    (both / ours.max(1.0), both / theirs.max(1.0))
+}
+
+fn camera(seed: u64) -> SyntheticCamera {
+    SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), seed)
+}
+
+#[test]
+fn the_person_is_found_at_every_distance_of_the_range() {
+    let body = body();
+    for (seed, z) in [(1u64, 1.6f32), (2, 2.0), (3, 2.5), (4, 3.0), (5, 3.5)] {
+        let mut scene = room();
+        scene.meshes.push(person(&body, 0.1, z, Label::Body));
+        let frame = camera(seed).render(&scene, 0.0);
+        let mut segmenter = Segmenter::new(SegmentSettings::default());
+        let found = segmenter.segment(&frame.frame).expect("a person");
+        let (precision, recall) = score(&frame, &found.mask);
+        println!(
+            "| {z} m | precision {precision:.4} | recall {recall:.4} | top {:.2} m |",
+            found.top_m
+        );
+        assert!(
+            precision > 0.99 && recall > 0.95,
+            "{z} m: {precision} {recall}"
+        );
+        assert!(
+            (found.centroid.z - z).abs() < 0.3,
+            "{z} m: {:?}",
+            found.centroid
+        );
+        // The floor is where the scene put it.
+        assert!(
+            (found.floor.d - SENSOR_HEIGHT).abs() < 0.02,
+            "{:?}",
+            found.floor
+        );
+    }
+}
+
+#[test]
+fn the_person_is_chosen_over_a_box_beside_and_a_person_behind() {
+    let body = body();
+    let mut scene = room();
+    scene.meshes.push(person(&body, 0.0, 2.4, Label::Body));
+    scene.meshes.push(person(&body, 1.0, 3.4, Label::Other));
+    scene.add_box(
+        Vec3::new(-0.9, -SENSOR_HEIGHT + 0.55, 2.3),
+        Vec3::new(0.25, 0.55, 0.25),
+        Label::Other,
+    );
+    let frame = camera(7).render(&scene, 0.0);
+    let found = Segmenter::new(SegmentSettings::default())
+        .segment(&frame.frame)
+        .expect("a person");
+    let (precision, recall) = score(&frame, &found.mask);
+    assert!(precision > 0.99 && recall > 0.95, "{precision} {recall}");
+    // By size alone a 1.1 m box could be a child: the choice, not the count, is what matters.
+    assert!(found.people >= 2, "{} people", found.people);
+}
+
+#[test]
+fn the_person_is_kept_while_another_walks_past_behind_and_found_again_after_leaving() {
+    let body = body();
+    let mut segmenter = Segmenter::new(SegmentSettings::default());
+    let mut camera = camera(11);
+    // Someone walks behind, across the whole view, nearer the interaction area's centre than
+    // the person is at the start.
+    for step in 0..12 {
+        let mut scene = room();
+        scene.meshes.push(person(&body, 0.6, 2.2, Label::Body));
+        let x = -1.6 + 0.28 * step as f32;
+        scene.meshes.push(person(&body, x, 2.9, Label::Other));
+        let frame = camera.render(&scene, step as f64 / 30.0);
+        let found = segmenter.segment(&frame.frame).expect("a person");
+        let (precision, recall) = score(&frame, &found.mask);
+        assert!(
+            precision > 0.99 && recall > 0.9,
+            "step {step} (walker at x = {x}): {precision} {recall}"
+        );
+    }
+    // The room alone: nobody.
+    let empty = camera.render(&room(), 0.5);
+    assert!(segmenter.segment(&empty.frame).is_none());
+    // Back, elsewhere: found again.
+    let mut scene = room();
+    scene.meshes.push(person(&body, -0.4, 2.7, Label::Body));
+    let frame = camera.render(&scene, 0.6);
+    let found = segmenter.segment(&frame.frame).expect("found again");
+    let (precision, recall) = score(&frame, &found.mask);
+    assert!(precision > 0.99 && recall > 0.95, "{precision} {recall}");
+}
+
+#[test]
+fn a_tilted_sensor_still_finds_floor_and_person() {
+    let body = body();
+    // The sensor pitched 12° down: the scene turns 12° up about the sensor's x axis.
+    let pitch = Quat::from_rotation_x(-12f32.to_radians());
+    let mut scene = room();
+    scene.meshes.push(person(&body, 0.0, 2.6, Label::Body));
+    for mesh in &mut scene.meshes {
+        for p in &mut mesh.positions {
+            *p = pitch * *p;
+        }
+    }
+    let frame = camera(13).render(&scene, 0.0);
+    let found = Segmenter::new(SegmentSettings::default())
+        .segment(&frame.frame)
+        .expect("a person");
+    let (precision, recall) = score(&frame, &found.mask);
+    assert!(precision > 0.99 && recall > 0.95, "{precision} {recall}");
+    let tilt = found
+        .floor
+        .normal
+        .angle_between(pitch * Vec3::Y)
+        .to_degrees();
+    assert!(tilt < 1.0, "floor normal off by {tilt}°");
+}
+
+#[test]
+fn garbage_frames_give_no_person_and_no_panic() {
+    let camera = DepthCamera::default();
+    let zeros = DepthFrame::from_raw(vec![0; PIXELS], 0.0, 0, camera);
+    let none = DepthFrame::from_raw(vec![2047; PIXELS], 0.0, 0, camera);
+    let mut state = 12345u32;
+    let noise: Vec<u16> = (0..PIXELS)
+        .map(|_| {
+            state = state.wrapping_mul(1_664_525).wrapping_add(1_013_904_223);
+            (state >> 21) as u16
+        })
+        .collect();
+    let garbage = DepthFrame::from_raw(noise, 0.0, 0, camera);
+    let mut segmenter = Segmenter::new(SegmentSettings::default());
+    for frame in [&zeros, &none, &garbage] {
+        assert!(segmenter.segment(frame).is_none());
+    }
+}
