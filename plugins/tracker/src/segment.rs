@@ -71,8 +71,10 @@ pub struct Segmenter {
     pub settings: SegmentSettings,
     floor: Option<(Plane, usize)>,
     previous: Option<Vec<bool>>,
-    /// Scratch: component of each pixel (0: none).
+    /// Scratch: component of each pixel (0: none), and the depth of each reading above the
+    /// floor band (0: none).
     component: Vec<u32>,
+    depth: Vec<f32>,
     stack: Vec<u32>,
 }
 
@@ -136,24 +138,39 @@ impl Segmenter {
         let floor = self.floor(frame)?;
         let camera = frame.camera;
         let s = self.settings;
-        // Readings above the floor band, as points (NaN: none).
-        let point = |k: usize| -> Option<Vec3> {
-            let mm = frame.depth_mm[k];
-            if mm == 0 {
-                return None;
+        // Depths of the readings above the floor band (0: none). A pixel's point is z times
+        // its ray `r = ((cx - i) / fx, (cy - j) / fy, 1)`, so its height is `z (n · r) + d`,
+        // and `n · r` is a column term plus a row term.
+        let column: Vec<f32> = (0..WIDTH)
+            .map(|i| floor.normal.x * (camera.cx - i as f32) / camera.fx)
+            .collect();
+        self.depth.clear();
+        self.depth.resize(PIXELS, 0.0);
+        for (j, (out, mm)) in self
+            .depth
+            .chunks_exact_mut(WIDTH)
+            .zip(frame.depth_mm.chunks_exact(WIDTH))
+            .enumerate()
+        {
+            let row = floor.normal.y * (camera.cy - j as f32) / camera.fy + floor.normal.z;
+            for ((out, &mm), &col) in out.iter_mut().zip(mm).zip(&column) {
+                let z = f32::from(mm) * 0.001;
+                let noise = 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4);
+                let above = z * (col + row) + floor.d > s.floor_band_m + 3.0 * noise;
+                *out = if mm > 0 && above { z } else { 0.0 };
             }
-            let z = f32::from(mm) / 1000.0;
-            let p = camera.unproject((k % WIDTH) as f32, (k / WIDTH) as f32, z);
-            let noise = 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4);
-            (floor.height(p) > s.floor_band_m + 3.0 * noise).then_some(p)
+        }
+        let depth = &self.depth;
+        let point = |k: usize| {
+            let z = depth[k];
+            (z > 0.0).then(|| camera.unproject((k % WIDTH) as f32, (k / WIDTH) as f32, z))
         };
-        let points: Vec<Option<Vec3>> = (0..PIXELS).map(point).collect();
         self.component.clear();
         self.component.resize(PIXELS, 0);
         let mut stats = vec![Stats::new()];
         let pixel_area = |z: f32| (z / camera.fx) * (z / camera.fy);
         for seed in 0..PIXELS {
-            if points[seed].is_none() || self.component[seed] != 0 {
+            if depth[seed] == 0.0 || self.component[seed] != 0 {
                 continue;
             }
             let id = stats.len() as u32;
@@ -163,7 +180,7 @@ impl Segmenter {
             self.component[seed] = id;
             while let Some(k) = self.stack.pop() {
                 let k = k as usize;
-                let Some(p) = points[k] else { continue };
+                let Some(p) = point(k) else { continue };
                 let (i, j) = (k % WIDTH, k / WIDTH);
                 c.pixels += 1;
                 c.sum += p;
@@ -184,9 +201,8 @@ impl Segmenter {
                     c.overlap += 1;
                 }
                 let mut visit = |n: usize| {
-                    if self.component[n] == 0
-                        && let Some(q) = points[n]
-                        && (q.z - p.z).abs() < s.join_m + 0.03 * p.z
+                    let q = depth[n];
+                    if self.component[n] == 0 && q > 0.0 && (q - p.z).abs() < s.join_m + 0.03 * p.z
                     {
                         self.component[n] = id;
                         self.stack.push(n as u32);
