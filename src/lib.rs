@@ -303,9 +303,12 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             timing::TimingPlugin,
             GarmentPlugin { root: garment_root },
         ))
-        .add_plugins(sensors::DepthPlugin {
-            source_name: options.sensor.name(),
-        })
+        .add_plugins((
+            sensors::DepthPlugin {
+                source_name: options.sensor.name(),
+            },
+            fitroom_tracker::plugin::TrackerPlugin,
+        ))
         .add_plugins(fitroom_body::reload::BodyFilePlugin {
             file: options.body.clone(),
         })

@@ -245,3 +245,51 @@ fn a_kinect_that_is_not_there_is_reported_and_the_app_goes_on() {
     }
     assert!(app.world().resource::<DepthFeed>().latest.is_none());
 }
+
+/// A depth frame's count in the feed, its labels and its depth.
+type Rendered = (u64, std::sync::Arc<[u8]>, std::sync::Arc<[u16]>);
+
+#[test]
+fn the_app_segments_the_person_the_synthetic_sensor_sees() {
+    let mut options =
+        AppOptions::with_defaults(Mode::Headless { render: false }).expect("defaults");
+    options.sensor = SensorSpec::Synthetic;
+    options.motion = fitroom_testdata::clip_path("141_16.bvh");
+    let mut app = headless::headless_app(&options).expect("the app builds");
+    // Each update segments the frame the one before rendered: keep that frame's labels.
+    let mut previous: Option<Rendered> = None;
+    let mut compared = 0;
+    for _ in 0..90 {
+        app.update();
+        let world = app.world();
+        let map = world.resource::<fitroom_tracker::plugin::UserMap>();
+        if let (Some((count, labels, depth)), Some(person)) = (&previous, &map.person)
+            && map.frame == *count
+        {
+            let truth: Vec<bool> = (0..labels.len())
+                .map(|k| {
+                    (labels[k] == Label::Body as u8 || labels[k] == Label::Garment as u8)
+                        && depth[k] > 0
+                })
+                .collect();
+            let both = (0..truth.len())
+                .filter(|&k| truth[k] && person.mask[k])
+                .count() as f64;
+            let precision = both / person.pixels as f64;
+            let recall = both / truth.iter().filter(|&&t| t).count() as f64;
+            assert!(
+                precision > 0.98 && recall > 0.9,
+                "frame {count}: precision {precision:.3}, recall {recall:.3}"
+            );
+            compared += 1;
+        }
+        let feed = world.resource::<DepthFeed>();
+        previous = match (&feed.latest, &feed.labels) {
+            (Some(frame), Some(labels)) => {
+                Some((feed.frames_received, labels.clone(), frame.depth_mm.clone()))
+            }
+            _ => None,
+        };
+    }
+    assert!(compared >= 20, "{compared} frames segmented and compared");
+}

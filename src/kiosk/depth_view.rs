@@ -1,6 +1,6 @@
 //! The picture-in-picture depth view: the newest depth frame, colour-mapped (near warm, far
-//! cool, black where the sensor has no reading), in the screen's bottom-right corner with
-//! its source and state. Shown or hidden with its button (and the P key); a depth source's
+//! cool, black where the sensor has no reading), the person the segmentation found tinted
+//! pale, in the screen's bottom-right corner with its source and state. Shown or hidden with its button (and the P key); a depth source's
 //! error (a vanished Kinect, an unreadable frame) is written under the last good frame.
 
 use bevy::asset::RenderAssetUsages;
@@ -9,6 +9,7 @@ use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 use bevy_egui::{EguiContexts, EguiPrimaryContextPass, EguiTextureHandle, egui};
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_depth::{HEIGHT, WIDTH};
+use fitroom_tracker::plugin::UserMap;
 
 /// Whether the view is shown, and its image: one Bevy image written in place per depth
 /// frame (an egui-managed texture set every frame is a new GPU texture every frame, never
@@ -56,6 +57,7 @@ fn toggle_with_key(keys: Option<Res<ButtonInput<KeyCode>>>, mut view: ResMut<Dep
 fn depth_view(
     mut contexts: EguiContexts,
     feed: Option<Res<DepthFeed>>,
+    user: Option<Res<UserMap>>,
     mut view: ResMut<DepthView>,
     mut images: ResMut<Assets<Image>>,
 ) -> Result {
@@ -66,10 +68,23 @@ fn depth_view(
     {
         let view = &mut *view;
         fitroom_depth::colour::colourise(&frame.depth_mm, NEAR_MM, FAR_MM, &mut view.rgb);
+        // The person the segmentation found, tinted white, when it is of this frame.
+        let mask = user
+            .as_ref()
+            .filter(|u| u.frame == feed.frames_received)
+            .and_then(|u| u.person.as_ref())
+            .map(|p| &p.mask);
         let rgba: Vec<u8> = view
             .rgb
             .chunks_exact(3)
-            .flat_map(|p| [p[0], p[1], p[2], 255])
+            .enumerate()
+            .flat_map(|(k, p)| match mask {
+                Some(mask) if mask[k] => {
+                    let tint = |c: u8| ((u16::from(c) + 255) / 2) as u8;
+                    [tint(p[0]), tint(p[1]), tint(p[2]), 255]
+                }
+                _ => [p[0], p[1], p[2], 255],
+            })
             .collect();
         let current = view.image.as_ref().map(|(handle, _)| handle.clone());
         let exists = current.as_ref().is_some_and(|h| images.contains(h));
@@ -117,6 +132,15 @@ fn depth_view(
                         "depth: {} ({} frames)",
                         feed.source_name, feed.frames_received
                     ));
+                    if let Some(user) = user.as_ref() {
+                        ui.label(match &user.person {
+                            Some(p) => format!(
+                                "person: {} px at {:.1} m ({:.1} ms)",
+                                p.pixels, p.centroid.z, user.segment_ms
+                            ),
+                            None => "nobody in view".into(),
+                        });
+                    }
                 });
                 if view.shown {
                     match texture {
