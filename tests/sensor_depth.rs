@@ -137,6 +137,28 @@ fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
     assert_eq!(summary["ground_truth_lines"].as_u64(), Some(12));
     assert!((summary["fps"].as_f64().expect("fps") - 30.0).abs() < 0.5);
 
+    // The tracker's starting detector on it: head and hands found as surface extremities,
+    // each within 15 cm of its ground-truth joint in nine frames out of ten.
+    let out = fitroom()
+        .args(["track", "extrema", "--json", "--dump"])
+        .arg(&scratch.0)
+        .output()
+        .expect("fitroom runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["segmented"].as_u64(), Some(12));
+    for part in report["parts"].as_array().expect("parts") {
+        let name = part["part"].as_str().expect("a name");
+        let share = part["within_15cm_pct"].as_f64().expect("a share");
+        if ["Head", "HandLeft", "HandRight"].contains(&name) {
+            assert!(share >= 90.0, "{name}: {share} %");
+        }
+    }
+
     // Played back, each frame comes with its own line of ground truth.
     let mut app = depth_app(SensorSpec::Fakenect(scratch.0.clone()));
     for _ in 0..10 {

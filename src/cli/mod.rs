@@ -16,6 +16,7 @@ pub mod cloth;
 pub mod import;
 pub mod motion;
 pub mod sensor;
+pub mod track;
 
 /// The `fitroom` command.
 #[derive(Parser)]
@@ -63,6 +64,11 @@ pub enum Command {
         #[command(subcommand)]
         command: motion::MotionCommand,
     },
+    /// Seeing the person in depth recordings.
+    Track {
+        #[command(subcommand)]
+        command: track::TrackCommand,
+    },
 }
 
 /// Runs a parsed command line (the kiosk when it names no command).
@@ -82,6 +88,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Cloth { command } => cloth::run(command),
         Command::Body { command } => body::run(command),
         Command::Motion { command } => motion::run(command),
+        Command::Track { command } => track::run(command),
     }
 }
 

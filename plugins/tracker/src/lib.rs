@@ -1,16 +1,19 @@
 //! Seeing the person in the depth stream, without a proprietary SDK (libfreenect gives depth
 //! only): [`floor`] finds the floor plane, [`segment`] the person's pixels (the user map the
-//! Kinect SDK gave seed 000). The skeleton tracker will build on them.
+//! Kinect SDK gave seed 000), [`extrema`] head, hands and feet without a prior pose (to
+//! start and recover the tracker). The skeleton tracker will build on them.
 //!
 //! The `plugin` feature adds [`plugin::TrackerPlugin`]: the user map of each new depth frame.
 
 #![forbid(unsafe_code)]
 
+pub mod extrema;
 pub mod floor;
 pub mod segment;
 
 #[cfg(feature = "plugin")]
 pub mod plugin;
 
+pub use extrema::{Extremum, Part, geodesic_extrema};
 pub use floor::Plane;
 pub use segment::{SegmentSettings, Segmentation, Segmenter};

@@ -1,0 +1,237 @@
+//! Head, hands and feet without a prior pose: the accumulative geodesic extrema of the
+//! person's surface (Plagemann, Ganapathi, Koller & Thrun 2010, "Real-time identification
+//! and localization of body parts from depth images", ICRA). The person's pixels form a
+//! graph (8-neighbours joined where their depths are continuous, weighted by 3D distance);
+//! from the body's centre, the point farthest along the surface is an extremity; it joins
+//! the sources and the next farthest is found, five times. The tracker starts (and recovers)
+//! from these: they need no previous frame.
+//!
+//! Run at half resolution (every second pixel each way): a quarter of the nodes, and a
+//! person still has thousands of them from 1 to 4 m.
+
+use std::cmp::Reverse;
+use std::collections::BinaryHeap;
+
+use fitroom_depth::{DepthFrame, HEIGHT, WIDTH};
+use glam::Vec3;
+use serde::Serialize;
+
+use crate::floor::Plane;
+use crate::segment::Segmentation;
+
+/// Sampling step of the graph, pixels.
+const STEP: usize = 2;
+const W: usize = WIDTH / STEP;
+const H: usize = HEIGHT / STEP;
+
+/// Neighbours closer in depth than this plus 4 % of depth are joined (a depth jump, such as
+/// an arm in front of the body, cuts the graph there).
+const JOIN_M: f32 = 0.05;
+
+/// What an extremity was taken for.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Part {
+    Head,
+    HandLeft,
+    HandRight,
+    FootLeft,
+    FootRight,
+    /// An extremity none of the others fits (a knee, an elbow held out).
+    Other,
+}
+
+/// One geodesic extremity.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct Extremum {
+    /// Sensor space, metres.
+    pub position: Vec3,
+    /// Its pixel.
+    pub pixel: [u16; 2],
+    /// Surface distance from the body's centre, metres.
+    pub geodesic_m: f32,
+    pub part: Part,
+}
+
+/// The five extremities of `person` in `frame`, labelled (fewer when the graph has fewer
+/// distinct ends, e.g. hands on the hips).
+pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extremum> {
+    let camera = frame.camera;
+    // Nodes: the person's pixels on the half-resolution grid.
+    let mut points = vec![None; W * H];
+    for y in 0..H {
+        for x in 0..W {
+            let k = (y * STEP) * WIDTH + x * STEP;
+            let mm = frame.depth_mm[k];
+            if person.mask.get(k).copied().unwrap_or(false) && mm > 0 {
+                let z = f32::from(mm) / 1000.0;
+                points[y * W + x] = Some(camera.unproject((x * STEP) as f32, (y * STEP) as f32, z));
+            }
+        }
+    }
+    // The source: the node nearest the person's centroid.
+    let Some(start) = (0..W * H)
+        .filter_map(|n| points[n].map(|p| (n, p.distance_squared(person.centroid))))
+        .min_by(|a, b| a.1.total_cmp(&b.1))
+        .map(|(n, _)| n)
+    else {
+        return Vec::new();
+    };
+    let mut distance = vec![f32::INFINITY; W * H];
+    let mut sources = vec![start];
+    let mut found = Vec::new();
+    let mut from_centre = None;
+    for _ in 0..5 {
+        dijkstra(&points, &sources, &mut distance);
+        if from_centre.is_none() {
+            from_centre = Some(distance.clone());
+        }
+        let Some((far, d)) = distance
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| d.is_finite())
+            .max_by(|a, b| a.1.total_cmp(b.1))
+            .map(|(n, &d)| (n, d))
+        else {
+            break;
+        };
+        // An end closer than 15 cm to the ones found is the same limb.
+        if d < 0.15 {
+            break;
+        }
+        let (Some(position), Some(centre)) = (points[far], from_centre.as_ref()) else {
+            break;
+        };
+        found.push(Extremum {
+            position,
+            pixel: [((far % W) * STEP) as u16, ((far / W) * STEP) as u16],
+            geodesic_m: centre[far],
+            part: Part::Other,
+        });
+        sources.push(far);
+    }
+    label(&mut found, person.centroid, &person.floor);
+    found
+}
+
+/// Dijkstra's shortest surface distances from `sources` over the 8-connected graph.
+fn dijkstra(points: &[Option<Vec3>], sources: &[usize], distance: &mut [f32]) {
+    distance.fill(f32::INFINITY);
+    let mut heap = BinaryHeap::new();
+    for &s in sources {
+        distance[s] = 0.0;
+        heap.push(Reverse((Ordered(0.0), s)));
+    }
+    while let Some(Reverse((Ordered(d), n))) = heap.pop() {
+        if d > distance[n] {
+            continue;
+        }
+        let Some(p) = points[n] else { continue };
+        let (x, y) = ((n % W) as isize, (n / W) as isize);
+        for (dx, dy) in [
+            (-1, -1),
+            (0, -1),
+            (1, -1),
+            (-1, 0),
+            (1, 0),
+            (-1, 1),
+            (0, 1),
+            (1, 1),
+        ] {
+            let (nx, ny) = (x + dx, y + dy);
+            if nx < 0 || ny < 0 || nx >= W as isize || ny >= H as isize {
+                continue;
+            }
+            let m = ny as usize * W + nx as usize;
+            let Some(q) = points[m] else { continue };
+            if (q.z - p.z).abs() > JOIN_M + 0.04 * p.z {
+                continue;
+            }
+            let next = d + p.distance(q);
+            if next < distance[m] {
+                distance[m] = next;
+                heap.push(Reverse((Ordered(next), m)));
+            }
+        }
+    }
+}
+
+/// Names the extremities: the feet are the two lowest near the floor, the head the highest
+/// above the centre, the hands the rest (left and right by the side of the body they are on:
+/// a person facing the sensor has their left at -X).
+fn label(found: &mut [Extremum], centre: Vec3, floor: &Plane) {
+    let height = |e: &Extremum| floor.height(e.position);
+    let mut order: Vec<usize> = (0..found.len()).collect();
+    order.sort_by(|&a, &b| height(&found[a]).total_cmp(&height(&found[b])));
+    let centre_height = floor.height(centre);
+    let mut feet: Vec<usize> = order
+        .iter()
+        .copied()
+        .filter(|&i| height(&found[i]) < 0.45 * centre_height.max(0.5))
+        .take(2)
+        .collect();
+    feet.sort_by(|&a, &b| found[a].position.x.total_cmp(&found[b].position.x));
+    match feet.as_slice() {
+        [one] => {
+            found[*one].part = if found[*one].position.x < centre.x {
+                Part::FootLeft
+            } else {
+                Part::FootRight
+            }
+        }
+        [left, right] => {
+            found[*left].part = Part::FootLeft;
+            found[*right].part = Part::FootRight;
+        }
+        _ => {}
+    }
+    // The head: the highest remaining end above the centre that is nearest the body's
+    // vertical axis (a hand raised above the head is farther out to the side).
+    let head = order
+        .iter()
+        .copied()
+        .filter(|&i| found[i].part == Part::Other && height(&found[i]) > centre_height + 0.3)
+        .min_by(|&a, &b| {
+            let off = |e: &Extremum| (e.position.x - centre.x).abs();
+            off(&found[a]).total_cmp(&off(&found[b]))
+        });
+    if let Some(h) = head {
+        found[h].part = Part::Head;
+    }
+    let mut hands: Vec<usize> = (0..found.len())
+        .filter(|&i| found[i].part == Part::Other)
+        .collect();
+    hands.sort_by(|&a, &b| found[a].position.x.total_cmp(&found[b].position.x));
+    match hands.as_slice() {
+        [one] => {
+            found[*one].part = if found[*one].position.x < centre.x {
+                Part::HandLeft
+            } else {
+                Part::HandRight
+            }
+        }
+        [left, .., right] => {
+            found[*left].part = Part::HandLeft;
+            found[*right].part = Part::HandRight;
+        }
+        _ => {}
+    }
+}
+
+/// An `f32` ordered for the heap (distances are finite and not NaN).
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Ordered(f32);
+
+impl Eq for Ordered {}
+
+impl PartialOrd for Ordered {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        Some(self.cmp(other))
+    }
+}
+
+impl Ord for Ordered {
+    fn cmp(&self, other: &Self) -> std::cmp::Ordering {
+        self.0.total_cmp(&other.0)
+    }
+}

@@ -1,0 +1,75 @@
+//! Geodesic extrema on synthetic Kinect frames of the MakeHuman body in its rest pose, seen
+//! from 2 to 3.2 m, against the rig's own joints: the head's end by the head's centre, each
+//! hand's end beyond its wrist, each foot's end by its ball, each on the right side.
+
+use std::path::Path;
+
+use fitroom_body::{BodyModel, MODEL_TO_SENSOR};
+use fitroom_depth::DepthCamera;
+use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
+use fitroom_tracker::{Part, SegmentSettings, Segmenter, geodesic_extrema};
+use glam::Vec3;
+
+#[test]
+fn head_hands_and_feet_are_the_ends_of_the_surface() {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
+    let model = BodyModel::read(&path).expect("the shipped body");
+    let n = model.body_vertex_count as usize;
+    let rest = model.rest_pose(&model.positions);
+    let sole = model.positions[..n]
+        .iter()
+        .map(|p| p.y)
+        .fold(f32::INFINITY, f32::min);
+    for (seed, z) in [(1u64, 2.0f32), (2, 2.6), (3, 3.2)] {
+        let place = |p: Vec3| MODEL_TO_SENSOR * (p - Vec3::Y * sole) + Vec3::new(0.05, -0.8, z);
+        let bone = |name: &str| {
+            let i = model
+                .bones
+                .iter()
+                .position(|b| b.name == name)
+                .unwrap_or_else(|| panic!("the rig has {name}"));
+            place(rest.heads[i])
+        };
+        let mut scene = Scene::room(-0.8, 3.9);
+        scene.meshes.push(SceneMesh {
+            positions: model.positions[..n].iter().map(|&p| place(p)).collect(),
+            triangles: model.triangles.clone(),
+            label: Label::Body,
+            closed: true,
+        });
+        let frame = SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), seed)
+            .render(&scene, 0.0)
+            .frame;
+        let person = Segmenter::new(SegmentSettings::default())
+            .segment(&frame)
+            .expect("a person");
+        let ends = geodesic_extrema(&frame, &person);
+        let find = |part: Part| {
+            ends.iter()
+                .find(|e| e.part == part)
+                .unwrap_or_else(|| panic!("{z} m: no {part:?} among {ends:?}"))
+                .position
+        };
+        // The end of each part against the rig. The head's end lies on the visible cap of
+        // the head (its top is too oblique to the sensor to be read): within 15 cm of the
+        // head's centre, 9 cm above the head bone (which starts at the skull's base). A
+        // fingertip is 5-25 cm from the wrist; a toe tip within 12 cm of the ball of the foot.
+        let head = find(Part::Head);
+        let centre = bone("head") + Vec3::Y * 0.09;
+        assert!(
+            head.distance(centre) < 0.15,
+            "{z} m: head end {head} vs {centre}"
+        );
+        for (part, wrist) in [(Part::HandLeft, "hand_l"), (Part::HandRight, "hand_r")] {
+            let d = find(part).distance(bone(wrist));
+            assert!(
+                (0.05..0.25).contains(&d),
+                "{z} m: {part:?} {d:.3} m from {wrist}"
+            );
+        }
+        for (part, ball) in [(Part::FootLeft, "ball_l"), (Part::FootRight, "ball_r")] {
+            let d = find(part).distance(bone(ball));
+            assert!(d < 0.12, "{z} m: {part:?} {d:.3} m from {ball}");
+        }
+    }
+}
