@@ -3,6 +3,7 @@
 //! (the avatar's 20 Kinect joints and which pixels see body and garment).
 
 use bevy::prelude::*;
+use fitroom_body::MODEL_TO_SENSOR;
 use fitroom_body::plugin::{AvatarBody, AvatarJoint, SensorPlacement, world_skin};
 use fitroom_depth::synthetic::{Label, Scene, SceneMesh, SyntheticFrame};
 use fitroom_depth::truth::{FrameTruth, runs_of};
@@ -17,6 +18,43 @@ pub const WALL_Z_M: f32 = 3.6;
 /// The room the avatar stands in: floor and back wall, sensor space.
 pub fn room(placement: &SensorPlacement) -> Scene {
     Scene::room(-placement.sensor_height_m, WALL_Z_M)
+}
+
+/// What else the synthetic camera sees in the room, standing still: a box, a second person
+/// (the avatar's body in its rest pose), each at a sensor-space `(x, z)` on the floor.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Extras {
+    pub box_at: Option<[f32; 2]>,
+    pub person_at: Option<[f32; 2]>,
+}
+
+/// The room with `extras` in it.
+pub fn room_with(placement: &SensorPlacement, body: &AvatarBody, extras: Extras) -> Scene {
+    let mut scene = room(placement);
+    let floor = -placement.sensor_height_m;
+    if let Some([x, z]) = extras.box_at {
+        // A box of 0.5 x 1.0 x 0.5 m (a chair, a stand).
+        scene.add_box(
+            Vec3::new(x, floor + 0.5, z),
+            Vec3::new(0.25, 0.5, 0.25),
+            Label::Other,
+        );
+    }
+    if let Some([x, z]) = extras.person_at {
+        let n = (body.model.body_vertex_count as usize).min(body.positions.len());
+        let skin = &body.positions[..n];
+        let sole = skin.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+        scene.meshes.push(SceneMesh {
+            positions: skin
+                .iter()
+                .map(|&p| MODEL_TO_SENSOR * (p - Vec3::Y * sole) + Vec3::new(x, floor, z))
+                .collect(),
+            triangles: body.model.triangles.clone(),
+            label: Label::Other,
+            closed: true,
+        });
+    }
+    scene
 }
 
 /// World to sensor space.

@@ -70,6 +70,8 @@ pub struct AppOptions {
     pub distance_m: f32,
     /// How a `fakenect:DIR` recording is played.
     pub replay: sensors::Replay,
+    /// What else the synthetic camera sees (a box, a second person).
+    pub extras: depth_scene::Extras,
     /// Offscreen image size for headless rendering.
     pub image_size: UVec2,
     /// Replay the motion through the Kinect v1 noise model with this seed (`None`: clean).
@@ -119,6 +121,7 @@ impl AppOptions {
             depth_seed: 1,
             distance_m: BvhSourceOptions::default().start_distance_m,
             replay: sensors::Replay::default(),
+            extras: depth_scene::Extras::default(),
             image_size: UVec2::new(960, 720),
             noise_seed: None,
             shape: None,
@@ -204,6 +207,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         &placement,
         options.depth_seed,
         options.replay,
+        (&body, options.extras),
     )?;
     let mut app = App::new();
     // Garments, fabrics and size charts are assets of the garment folder (hot-reloaded):

@@ -19,7 +19,7 @@ use std::str::FromStr;
 
 use anyhow::{Context, Result, bail};
 use bevy::prelude::*;
-use fitroom_body::plugin::SensorPlacement;
+use fitroom_body::plugin::{AvatarBody, SensorPlacement};
 use fitroom_depth::DepthCamera;
 use fitroom_depth::player::Player;
 use fitroom_depth::plugin::DepthFeed;
@@ -112,13 +112,14 @@ impl ActiveDepth {
         placement: &SensorPlacement,
         seed: u64,
         replay: Replay,
+        scene: (&AvatarBody, depth_scene::Extras),
     ) -> Result<Option<Self>> {
         let camera = DepthCamera::default();
         Ok(match spec {
             SensorSpec::Bvh(_) => None,
             SensorSpec::Synthetic => Some(Self::Synthetic {
                 camera: Box::new(SyntheticCamera::new(camera, NoiseSettings::default(), seed)),
-                room: depth_scene::room(placement),
+                room: depth_scene::room_with(placement, scene.0, scene.1),
                 rendered: 0,
             }),
             SensorSpec::Fakenect(dir) => {

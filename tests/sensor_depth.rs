@@ -69,6 +69,13 @@ fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
             "3",
         ])
         .args(["--garment", "assets/garments/sundress.ron"])
+        // A box beside and a second person behind: not the person.
+        .args([
+            "--synthetic-box",
+            "0.9,2.3",
+            "--synthetic-person",
+            "-1.0,3.3",
+        ])
         .arg("--motion")
         .arg(fitroom_testdata::clip_path("141_16.bvh"))
         .arg("--out")

@@ -26,6 +26,13 @@ pub struct Inputs {
     /// recording), `kinect` (a Kinect v1 through libfreenect). Default: the configuration's.
     #[arg(long)]
     pub sensor: Option<String>,
+    /// With the synthetic sensor: a box (0.5 x 1 x 0.5 m) standing at sensor-space X,Z metres
+    /// (e.g. `0.9,2.4`: to the sensor's left, 2.4 m away).
+    #[arg(long, value_name = "X,Z", value_parser = parse_xz, allow_hyphen_values = true)]
+    pub synthetic_box: Option<[f32; 2]>,
+    /// With the synthetic sensor: a second person standing still at X,Z (e.g. `-1.0,3.3`).
+    #[arg(long, value_name = "X,Z", value_parser = parse_xz, allow_hyphen_values = true)]
+    pub synthetic_person: Option<[f32; 2]>,
     /// Play a `fakenect:DIR` recording this many times as fast as it was recorded.
     #[arg(long, default_value_t = 1.0)]
     pub replay_speed: f64,
@@ -130,6 +137,20 @@ pub struct RunArgs {
     pub inputs: Inputs,
 }
 
+/// `X,Z` in metres, both finite.
+fn parse_xz(text: &str) -> Result<[f32; 2], String> {
+    let parse = |s: &str| s.trim().parse::<f32>().ok().filter(|v| v.is_finite());
+    match text.split_once(',') {
+        Some((x, z)) => match (parse(x), parse(z)) {
+            (Some(x), Some(z)) => Ok([x, z]),
+            _ => Err(format!(
+                "\"{text}\": give two numbers in metres, X,Z (e.g. 0.9,2.4)"
+            )),
+        },
+        None => Err(format!("\"{text}\": give X,Z in metres (e.g. 0.9,2.4)")),
+    }
+}
+
 /// The app's options from the command line's inputs (the configuration's defaults for what
 /// they leave out).
 pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
@@ -182,6 +203,10 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         motion,
         depth_seed: inputs.seed,
         distance_m: defaults.distance_m,
+        extras: crate::depth_scene::Extras {
+            box_at: inputs.synthetic_box,
+            person_at: inputs.synthetic_person,
+        },
         replay: crate::sensors::Replay {
             speed: inputs.replay_speed,
             looping: !inputs.replay_once,

@@ -156,8 +156,8 @@ fn dijkstra(points: &[Option<Vec3>], sources: &[usize], distance: &mut [f32]) {
     }
 }
 
-/// Names the extremities: the feet are the two lowest near the floor, the head the highest
-/// above the centre, the hands the rest (left and right by the side of the body they are on:
+/// Names the extremities: the feet are the two lowest near the floor, the head the upper end
+/// nearest the centre along the surface, the hands the rest (left and right by the side of the body they are on:
 /// a person facing the sensor has their left at -X).
 fn label(found: &mut [Extremum], centre: Vec3, floor: &Plane) {
     let height = |e: &Extremum| floor.height(e.position);
@@ -185,16 +185,13 @@ fn label(found: &mut [Extremum], centre: Vec3, floor: &Plane) {
         }
         _ => {}
     }
-    // The head: the highest remaining end above the centre that is nearest the body's
-    // vertical axis (a hand raised above the head is farther out to the side).
+    // The head: of the ends well above the centre, the nearest to it along the surface (the
+    // head sits on the trunk; a hand raised above it is an arm's length farther).
     let head = order
         .iter()
         .copied()
         .filter(|&i| found[i].part == Part::Other && height(&found[i]) > centre_height + 0.3)
-        .min_by(|&a, &b| {
-            let off = |e: &Extremum| (e.position.x - centre.x).abs();
-            off(&found[a]).total_cmp(&off(&found[b]))
-        });
+        .min_by(|&a, &b| found[a].geodesic_m.total_cmp(&found[b].geodesic_m));
     if let Some(h) = head {
         found[h].part = Part::Head;
     }
