@@ -2,7 +2,8 @@
 //! MakeHuman body at 2.5 m, floor and back wall; every part of the error model) on one core,
 //! and reading one recorded frame back from a fakenect folder.
 //!
-//! Run: `cargo bench -p fitroom_depth --bench depth` (add `-- --quick` for a short run).
+//! Run: `taskset -c 0 cargo bench -p fitroom_depth --no-default-features --bench depth` (the
+//! Bevy-free core only; add `-- --quick` for a short run).
 
 use std::hint::black_box;
 use std::path::Path;

@@ -1,7 +1,7 @@
 //! Segmentation speed: one 640x480 synthetic frame of the MakeHuman body at 2.5 m in a room,
 //! with a second person behind (the floor kept from the frame before, as in a stream).
 //!
-//! Run: `taskset -c 0 cargo bench -p fitroom_tracker --bench segment`.
+//! Run: `taskset -c 0 cargo bench -p fitroom_tracker --no-default-features --bench segment`.
 
 use std::hint::black_box;
 use std::path::Path;
