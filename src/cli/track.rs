@@ -20,8 +20,9 @@ use super::OutputArgs;
 #[derive(Subcommand)]
 pub enum TrackCommand {
     /// Head, hands and feet found as geodesic extrema in every frame of a synthetic
-    /// recording, against its ground-truth joints: per part, the share of frames it was found
-    /// within 15 cm of its joint, and the distance's mean and 95th percentile.
+    /// recording, their joints estimated from the surface around each end, against the
+    /// ground-truth joints: per part, the share of frames within 15 cm, the distance's mean
+    /// and 95th percentile.
     Extrema {
         /// A recording with ground truth (`fitroom sensor record --synthetic`).
         #[arg(long)]
@@ -72,8 +73,7 @@ pub struct ExtremaReport {
     pub parts: Vec<PartReport>,
 }
 
-/// The Kinect joint each part is compared with (a hand's end is its fingertips, 10 cm past
-/// the hand joint; a foot's end its toes, by the foot joint).
+/// The Kinect joint each part's estimated joint is compared with.
 const PARTS: [(Part, KinectJoint); 5] = [
     (Part::Head, KinectJoint::Head),
     (Part::HandLeft, KinectJoint::HandLeft),
@@ -111,7 +111,7 @@ fn extrema(dump: &Path) -> Result<ExtremaReport> {
             let Some(&truth) = line.joints.get(joint.index()) else {
                 continue;
             };
-            distances[k].push(f64::from(found.position.distance(Vec3::from_array(truth))));
+            distances[k].push(f64::from(found.joint.distance(Vec3::from_array(truth))));
         }
     }
     let parts = PARTS

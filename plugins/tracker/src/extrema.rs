@@ -44,8 +44,12 @@ pub enum Part {
 /// One geodesic extremity.
 #[derive(Clone, Copy, Debug, Serialize)]
 pub struct Extremum {
-    /// Sensor space, metres.
+    /// The end itself (the top of the head, a fingertip, a toe), sensor space, metres.
     pub position: Vec3,
+    /// Where the part's Kinect joint is estimated: the centre of the surface within the
+    /// part's radius of the end, pushed into the body along the ray by half the part's
+    /// thickness (the head's centre, the hand's middle, the ball of the foot).
+    pub joint: Vec3,
     /// Its pixel.
     pub pixel: [u16; 2],
     /// Surface distance from the body's centre, metres.
@@ -104,6 +108,7 @@ pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extrem
         };
         found.push(Extremum {
             position,
+            joint: position,
             pixel: [((far % W) * STEP) as u16, ((far / W) * STEP) as u16],
             geodesic_m: centre[far],
             part: Part::Other,
@@ -111,7 +116,32 @@ pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extrem
         sources.push(far);
     }
     label(&mut found, person.centroid, &person.floor);
+    for e in &mut found {
+        let node = (usize::from(e.pixel[1]) / STEP) * W + usize::from(e.pixel[0]) / STEP;
+        let (radius, depth) = part_size(e.part);
+        dijkstra(&points, &[node], &mut distance);
+        let (sum, count) = (0..W * H)
+            .filter(|&n| distance[n] <= radius)
+            .filter_map(|n| points[n])
+            .fold((Vec3::ZERO, 0usize), |(s, c), p| (s + p, c + 1));
+        if count > 0 {
+            let centre = sum / count as f32;
+            e.joint = centre + centre.normalize_or_zero() * depth;
+        }
+    }
     found
+}
+
+/// A part's radius on the surface around its end and half its thickness, metres: the head's
+/// visible cap (12 cm, 8 cm deep: the Kinect's head joint is the head's centre), a hand to
+/// its knuckles (9 cm, 2 cm), a foot's front to its ball (6 cm, 3 cm).
+fn part_size(part: Part) -> (f32, f32) {
+    match part {
+        Part::Head => (0.12, 0.08),
+        Part::HandLeft | Part::HandRight => (0.09, 0.02),
+        Part::FootLeft | Part::FootRight => (0.06, 0.03),
+        Part::Other => (0.05, 0.0),
+    }
 }
 
 /// Dijkstra's shortest surface distances from `sources` over the 8-connected graph.
