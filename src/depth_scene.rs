@@ -3,7 +3,6 @@
 //! (the avatar's 20 Kinect joints and which pixels see body and garment).
 
 use bevy::prelude::*;
-use fitroom_body::MODEL_TO_SENSOR;
 use fitroom_body::plugin::{AvatarBody, AvatarJoint, SensorPlacement, world_skin};
 use fitroom_depth::synthetic::{Label, Scene, SceneMesh, SyntheticFrame};
 use fitroom_depth::truth::{FrameTruth, runs_of};
@@ -42,12 +41,11 @@ pub fn room_with(placement: &SensorPlacement, body: &AvatarBody, extras: Extras)
     }
     if let Some([x, z]) = extras.person_at {
         let n = (body.model.body_vertex_count as usize).min(body.positions.len());
-        let skin = &body.positions[..n];
-        let sole = skin.iter().map(|p| p.y).fold(f32::INFINITY, f32::min);
+        let standing = body.model.standing_in_sensor_space(&body.positions);
         scene.meshes.push(SceneMesh {
-            positions: skin
+            positions: body.positions[..n]
                 .iter()
-                .map(|&p| MODEL_TO_SENSOR * (p - Vec3::Y * sole) + Vec3::new(x, floor, z))
+                .map(|&p| standing.transform_point3(p) + Vec3::new(x, floor, z))
                 .collect(),
             triangles: body.model.triangles.clone(),
             label: Label::Other,

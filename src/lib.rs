@@ -108,11 +108,8 @@ impl AppOptions {
             || assets.join(assets::DEFAULT_MOTION),
             |clip| assets.join(clip),
         );
-        let sensor = match config.sensor_spec()? {
-            // The clip, resolved against the assets folder.
-            sensors::SensorSpec::Bvh(_) => sensors::SensorSpec::Bvh(motion.clone()),
-            other => other,
-        };
+        // The clip, resolved against the assets folder.
+        let sensor = config.sensor_spec()?.with_clip(&motion);
         Ok(Self {
             mode,
             body: assets.join(assets::DEFAULT_BODY),

@@ -64,6 +64,15 @@ impl FromStr for SensorSpec {
 }
 
 impl SensorSpec {
+    /// A `bvh:` sensor replaying `clip` (the path the app resolved); other sensors as they
+    /// are.
+    pub fn with_clip(self, clip: &std::path::Path) -> Self {
+        match self {
+            Self::Bvh(_) => Self::Bvh(clip.to_owned()),
+            other => other,
+        }
+    }
+
     /// The name shown on screen.
     pub fn name(&self) -> String {
         match self {
@@ -97,7 +106,10 @@ pub enum ActiveDepth {
     /// Renders the avatar after each new skeleton frame.
     Synthetic {
         camera: Box<SyntheticCamera>,
-        room: Scene,
+        /// The room (its first `room_meshes` meshes, which do not move), then the avatar's
+        /// meshes of the last frame, replaced each frame (the room is not copied).
+        scene: Scene,
+        room_meshes: usize,
         rendered: u64,
     },
     /// A recording, with its ground truth when it has one.
@@ -117,11 +129,15 @@ impl ActiveDepth {
         let camera = DepthCamera::default();
         Ok(match spec {
             SensorSpec::Bvh(_) => None,
-            SensorSpec::Synthetic => Some(Self::Synthetic {
-                camera: Box::new(SyntheticCamera::new(camera, NoiseSettings::default(), seed)),
-                room: depth_scene::room_with(placement, scene.0, scene.1),
-                rendered: 0,
-            }),
+            SensorSpec::Synthetic => {
+                let room = depth_scene::room_with(placement, scene.0, scene.1);
+                Some(Self::Synthetic {
+                    camera: Box::new(SyntheticCamera::new(camera, NoiseSettings::default(), seed)),
+                    room_meshes: room.meshes.len(),
+                    scene: room,
+                    rendered: 0,
+                })
+            }
             SensorSpec::Fakenect(dir) => {
                 let mut player = Player::open(dir, camera)
                     .with_context(|| format!("cannot play the recording '{}'", dir.display()))?;
@@ -226,7 +242,8 @@ fn render_synthetic_depth(world: &mut World) {
     };
     if let ActiveDepth::Synthetic {
         camera,
-        room,
+        scene,
+        room_meshes,
         rendered,
     } = &mut active
         && delivered > *rendered
@@ -234,7 +251,7 @@ fn render_synthetic_depth(world: &mut World) {
         *rendered = delivered;
         if let Some(meshes) = depth_scene::avatar_meshes(world) {
             let joints = depth_scene::avatar_kinect_joints(world);
-            let mut scene = room.clone();
+            scene.meshes.truncate(*room_meshes);
             scene.meshes.extend(meshes);
             let time_s = world
                 .get_resource::<Time>()
@@ -242,7 +259,7 @@ fn render_synthetic_depth(world: &mut World) {
             let index = world
                 .get_resource::<DepthFeed>()
                 .map_or(0, |f| f.frames_received as usize);
-            let frame = camera.render(&scene, time_s);
+            let frame = camera.render(scene, time_s);
             let truth = joints.map(|j| depth_scene::frame_truth(index, &frame, &j));
             if let Some(mut feed) = world.get_resource_mut::<DepthFeed>() {
                 feed.labels = Some(frame.labels.clone());

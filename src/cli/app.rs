@@ -176,10 +176,7 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         (None, SensorSpec::Bvh(clip)) => clip.clone(),
         (None, _) => defaults.motion,
     };
-    let sensor = match sensor {
-        SensorSpec::Bvh(_) => SensorSpec::Bvh(motion.clone()),
-        other => other,
-    };
+    let sensor = sensor.with_clip(&motion);
     let noise_seed = match inputs.noise {
         Noise::None => None,
         Noise::Kinect => Some(inputs.seed),

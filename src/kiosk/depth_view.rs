@@ -74,27 +74,20 @@ fn depth_view(
             .filter(|u| u.frame == feed.frames_received)
             .and_then(|u| u.person.as_ref())
             .map(|p| &p.mask);
-        let rgba: Vec<u8> = view
-            .rgb
-            .chunks_exact(3)
-            .enumerate()
-            .flat_map(|(k, p)| match mask {
-                Some(mask) if mask[k] => {
-                    let tint = |c: u8| ((u16::from(c) + 255) / 2) as u8;
-                    [tint(p[0]), tint(p[1]), tint(p[2]), 255]
-                }
-                _ => [p[0], p[1], p[2], 255],
-            })
-            .collect();
         let current = view.image.as_ref().map(|(handle, _)| handle.clone());
         let exists = current.as_ref().is_some_and(|h| images.contains(h));
         match current {
             Some(handle) if exists => {
                 if let Some(mut image) = images.get_mut(&handle) {
-                    image.data = Some(rgba);
+                    // The image's own buffer, refilled: nothing allocated per frame.
+                    let mut data = image.data.take().unwrap_or_default();
+                    to_rgba(&view.rgb, mask, &mut data);
+                    image.data = Some(data);
                 }
             }
             _ => {
+                let mut rgba = Vec::new();
+                to_rgba(&view.rgb, mask, &mut rgba);
                 let image = Image::new(
                     Extent3d {
                         width: WIDTH as u32,
@@ -158,4 +151,20 @@ fn depth_view(
             });
         });
     Ok(())
+}
+
+/// `rgb` as RGBA into `out`, the person's pixels (`mask`) tinted halfway to white.
+fn to_rgba(rgb: &[u8], mask: Option<&Vec<bool>>, out: &mut Vec<u8>) {
+    out.clear();
+    out.reserve(rgb.len() / 3 * 4);
+    let tint = |c: u8| ((u16::from(c) + 255) / 2) as u8;
+    for (k, p) in rgb.chunks_exact(3).enumerate() {
+        let pixel = match mask {
+            Some(mask) if mask.get(k).copied().unwrap_or(false) => {
+                [tint(p[0]), tint(p[1]), tint(p[2]), 255]
+            }
+            _ => [p[0], p[1], p[2], 255],
+        };
+        out.extend_from_slice(&pixel);
+    }
 }

@@ -3,7 +3,7 @@
 //! Model space: metres, +Y up, the body faces +Z, +X is the body's left. This is MakeHuman's
 //! mesh space scaled from decimetres to metres.
 
-use glam::{Quat, Vec2, Vec3};
+use glam::{Affine3A, Quat, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 
 /// Turns model space (facing +Z, +X the body's left) into Kinect sensor space so the body faces
@@ -120,6 +120,19 @@ impl BodyModel {
     /// Index of the morph target called `name` (e.g. `arms/measure-lowerarm-length-incr`).
     pub fn target_index(&self, name: &str) -> Option<usize> {
         self.targets.iter().position(|t| t.name == name)
+    }
+
+    /// Model space to a body standing in sensor space: facing the sensor
+    /// ([`MODEL_TO_SENSOR`]), its soles (the lowest body vertex of `positions`, the model's or
+    /// a shaped body's) at `y = 0` below the origin. Add the spot it stands on.
+    pub fn standing_in_sensor_space(&self, positions: &[Vec3]) -> Affine3A {
+        let body = (self.body_vertex_count as usize).min(positions.len());
+        let sole = positions[..body]
+            .iter()
+            .map(|p| p.y)
+            .fold(f32::INFINITY, f32::min);
+        let sole = if sole.is_finite() { sole } else { 0.0 };
+        Affine3A::from_quat(MODEL_TO_SENSOR) * Affine3A::from_translation(-Vec3::Y * sole)
     }
 
     /// Number of vertices in the whole mesh (body and helpers).

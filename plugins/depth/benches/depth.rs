@@ -9,7 +9,7 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use fitroom_body::{BodyModel, MODEL_TO_SENSOR};
+use fitroom_body::BodyModel;
 use fitroom_depth::DepthCamera;
 use fitroom_depth::fakenect::{Recording, RecordingWriter};
 use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
@@ -20,13 +20,10 @@ fn avatar_scene() -> Scene {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
     let model = BodyModel::read(&path).expect("the shipped body");
     let n = model.body_vertex_count as usize;
-    let sole = model.positions[..n]
-        .iter()
-        .map(|p| p.y)
-        .fold(f32::INFINITY, f32::min);
+    let standing = model.standing_in_sensor_space(&model.positions);
     let positions = model.positions[..n]
         .iter()
-        .map(|&p| MODEL_TO_SENSOR * (p - Vec3::Y * sole) + Vec3::new(0.0, -0.8, 2.5))
+        .map(|&p| standing.transform_point3(p) + Vec3::new(0.0, -0.8, 2.5))
         .collect();
     let mut scene = Scene::room(-0.8, 3.6);
     scene.meshes.push(SceneMesh {

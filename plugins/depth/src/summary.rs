@@ -9,10 +9,7 @@ use std::path::Path;
 
 use crate::camera::DepthCamera;
 use crate::fakenect::{EntryKind, FakenectError, Recording};
-
-/// The ground-truth file a synthetic recorder writes beside `INDEX.txt`: one JSON object per
-/// depth frame, in the index's order.
-pub use crate::truth::TRUTH_FILE as GROUND_TRUTH;
+use crate::truth::TRUTH_FILE;
 
 /// A recording in numbers (see [`summarise`]).
 #[derive(Debug, Clone, serde::Serialize)]
@@ -33,7 +30,7 @@ pub struct RecordingSummary {
     /// Nearest and farthest reading over all depth frames, millimetres (`None` without a
     /// single reading).
     pub depth_range_mm: Option<(u16, u16)>,
-    /// Whether [`GROUND_TRUTH`] lies beside `INDEX.txt`.
+    /// Whether [`TRUTH_FILE`] lies beside `INDEX.txt`.
     pub ground_truth: bool,
     /// Its non-blank lines, when it is there: one per depth frame if it is complete (a
     /// different count is reported, not refused).
@@ -77,7 +74,7 @@ pub fn summarise(dir: &Path, camera: DepthCamera) -> Result<RecordingSummary, Fa
         0.0
     };
 
-    let truth = dir.join(GROUND_TRUTH);
+    let truth = dir.join(TRUTH_FILE);
     let ground_truth_lines = if truth.is_file() {
         Some(count_lines(&truth)?)
     } else {

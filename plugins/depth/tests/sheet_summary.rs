@@ -7,7 +7,8 @@ use std::path::{Path, PathBuf};
 use fitroom_depth::camera::{metres_to_raw, raw_to_mm};
 use fitroom_depth::fakenect::{AccelState, FakenectError, Recording, RecordingWriter};
 use fitroom_depth::sheet::{GAP, GAP_COLOUR, contact_sheet};
-use fitroom_depth::summary::{GROUND_TRUTH, summarise};
+use fitroom_depth::summary::summarise;
+use fitroom_depth::truth::TRUTH_FILE;
 use fitroom_depth::{DepthCamera, HEIGHT, PIXELS, RAW_NO_VALUE, WIDTH};
 
 struct Scratch(PathBuf);
@@ -226,13 +227,13 @@ fn the_summary_finds_ground_truth_and_counts_its_lines() {
     let scratch = Scratch::new("truth");
     record(&scratch.0, 4);
     let lines: String = (0..4).map(|k| format!("{{\"frame\":{k}}}\n")).collect();
-    std::fs::write(scratch.0.join(GROUND_TRUTH), lines + "\n").expect("ground truth");
+    std::fs::write(scratch.0.join(TRUTH_FILE), lines + "\n").expect("ground truth");
     let summary = summarise(&scratch.0, DepthCamera::default()).expect("a summary");
     assert!(summary.ground_truth);
     assert_eq!(summary.ground_truth_lines, Some(4));
 
     // Short by one: reported by the count, not refused.
-    std::fs::write(scratch.0.join(GROUND_TRUTH), "{}\n{}\n{}").expect("ground truth");
+    std::fs::write(scratch.0.join(TRUTH_FILE), "{}\n{}\n{}").expect("ground truth");
     let summary = summarise(&scratch.0, DepthCamera::default()).expect("a summary");
     assert_eq!(summary.ground_truth_lines, Some(3));
     assert_ne!(summary.ground_truth_lines, Some(summary.depth_frames));

@@ -7,7 +7,7 @@ use std::hint::black_box;
 use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use fitroom_body::{BodyModel, MODEL_TO_SENSOR};
+use fitroom_body::BodyModel;
 use fitroom_depth::DepthCamera;
 use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
 use fitroom_tracker::{SegmentSettings, Segmenter};
@@ -17,14 +17,11 @@ fn bench(c: &mut Criterion) {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
     let model = BodyModel::read(&path).expect("the shipped body");
     let n = model.body_vertex_count as usize;
-    let sole = model.positions[..n]
-        .iter()
-        .map(|p| p.y)
-        .fold(f32::INFINITY, f32::min);
+    let standing = model.standing_in_sensor_space(&model.positions);
     let at = |x: f32, z: f32, label| SceneMesh {
         positions: model.positions[..n]
             .iter()
-            .map(|&p| MODEL_TO_SENSOR * (p - Vec3::Y * sole) + Vec3::new(x, -0.8, z))
+            .map(|&p| standing.transform_point3(p) + Vec3::new(x, -0.8, z))
             .collect(),
         triangles: model.triangles.clone(),
         label,

@@ -86,7 +86,7 @@ pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extrem
     let mut found = Vec::new();
     let mut from_centre = None;
     for _ in 0..5 {
-        dijkstra(&points, &sources, &mut distance);
+        dijkstra(&points, &sources, &mut distance, f32::INFINITY);
         if from_centre.is_none() {
             from_centre = Some(distance.clone());
         }
@@ -119,7 +119,7 @@ pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extrem
     for e in &mut found {
         let node = (usize::from(e.pixel[1]) / STEP) * W + usize::from(e.pixel[0]) / STEP;
         let (radius, depth) = part_size(e.part);
-        dijkstra(&points, &[node], &mut distance);
+        dijkstra(&points, &[node], &mut distance, radius);
         let (sum, count) = (0..W * H)
             .filter(|&n| distance[n] <= radius)
             .filter_map(|n| points[n])
@@ -144,8 +144,9 @@ fn part_size(part: Part) -> (f32, f32) {
     }
 }
 
-/// Dijkstra's shortest surface distances from `sources` over the 8-connected graph.
-fn dijkstra(points: &[Option<Vec3>], sources: &[usize], distance: &mut [f32]) {
+/// Dijkstra's shortest surface distances from `sources` over the 8-connected graph, up to
+/// `limit` (nodes farther stay at their first estimate or infinite).
+fn dijkstra(points: &[Option<Vec3>], sources: &[usize], distance: &mut [f32], limit: f32) {
     distance.fill(f32::INFINITY);
     let mut heap = BinaryHeap::new();
     for &s in sources {
@@ -155,6 +156,9 @@ fn dijkstra(points: &[Option<Vec3>], sources: &[usize], distance: &mut [f32]) {
     while let Some(Reverse((Ordered(d), n))) = heap.pop() {
         if d > distance[n] {
             continue;
+        }
+        if d > limit {
+            break;
         }
         let Some(p) = points[n] else { continue };
         let (x, y) = ((n % W) as isize, (n / W) as isize);

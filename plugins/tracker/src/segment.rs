@@ -12,6 +12,7 @@
 //!
 //! The result is the user map the Kinect SDK gave seed 000 (libfreenect has none).
 
+use fitroom_depth::noise::axial_sigma_with_grazing_m;
 use fitroom_depth::{DepthFrame, HEIGHT, PIXELS, WIDTH};
 use glam::Vec3;
 use serde::Serialize;
@@ -155,7 +156,7 @@ impl Segmenter {
             let row = floor.normal.y * (camera.cy - j as f32) / camera.fy + floor.normal.z;
             for ((out, &mm), &col) in out.iter_mut().zip(mm).zip(&column) {
                 let z = f32::from(mm) * 0.001;
-                let noise = 0.0012 + 0.0019 * (z - 0.4) * (z - 0.4);
+                let noise = axial_sigma_with_grazing_m(z, 0.0);
                 let above = z * (col + row) + floor.d > s.floor_band_m + 3.0 * noise;
                 *out = if mm > 0 && above { z } else { 0.0 };
             }

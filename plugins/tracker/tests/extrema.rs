@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use fitroom_body::{BodyModel, MODEL_TO_SENSOR};
+use fitroom_body::BodyModel;
 use fitroom_depth::DepthCamera;
 use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
 use fitroom_tracker::{Part, SegmentSettings, Segmenter, geodesic_extrema};
@@ -17,12 +17,9 @@ fn head_hands_and_feet_are_the_ends_of_the_surface() {
     let model = BodyModel::read(&path).expect("the shipped body");
     let n = model.body_vertex_count as usize;
     let rest = model.rest_pose(&model.positions);
-    let sole = model.positions[..n]
-        .iter()
-        .map(|p| p.y)
-        .fold(f32::INFINITY, f32::min);
+    let standing = model.standing_in_sensor_space(&model.positions);
     for (seed, z) in [(1u64, 2.0f32), (2, 2.6), (3, 3.2)] {
-        let place = |p: Vec3| MODEL_TO_SENSOR * (p - Vec3::Y * sole) + Vec3::new(0.05, -0.8, z);
+        let place = |p: Vec3| standing.transform_point3(p) + Vec3::new(0.05, -0.8, z);
         let bone = |name: &str| {
             let i = model
                 .bones

@@ -5,7 +5,7 @@
 
 use std::path::Path;
 
-use fitroom_body::{BodyModel, MODEL_TO_SENSOR};
+use fitroom_body::BodyModel;
 use fitroom_depth::synthetic::{
     Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, SyntheticFrame,
 };
@@ -25,14 +25,11 @@ fn body() -> Body {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
     let model = BodyModel::read(&path).expect("the shipped body");
     let n = model.body_vertex_count as usize;
-    let sole = model.positions[..n]
-        .iter()
-        .map(|p| p.y)
-        .fold(f32::INFINITY, f32::min);
+    let standing = model.standing_in_sensor_space(&model.positions);
     Body {
         positions: model.positions[..n]
             .iter()
-            .map(|&p| MODEL_TO_SENSOR * (p - Vec3::Y * sole))
+            .map(|&p| standing.transform_point3(p))
             .collect(),
         triangles: model.triangles.clone(),
     }
