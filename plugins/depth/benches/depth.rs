@@ -1,6 +1,8 @@
 //! The depth camera's speed goals: a synthetic 640x480 frame of the avatar in a room (the
 //! MakeHuman body at 2.5 m, floor and back wall; every part of the error model) on one core,
-//! and reading one recorded frame back from a fakenect folder.
+//! and reading one recorded frame back from a fakenect folder. The room is the scene's still
+//! part (`Scene::still`, as `Scene::room` makes it): kept rendered, the body drawn every
+//! frame, as in the app; the second synthetic case draws everything every frame.
 //!
 //! Run: `taskset -c 0 cargo bench -p fitroom_depth --no-default-features --bench depth` (the
 //! Bevy-free core only; add `-- --quick` for a short run).
@@ -42,6 +44,15 @@ fn bench(c: &mut Criterion) {
     c.bench_function(
         &format!("synthetic_frame_640x480_avatar_in_room_{triangles}_triangles"),
         |b| b.iter(|| black_box(camera.render(&scene, 0.0))),
+    );
+    let everything = Scene {
+        still: 0,
+        ..scene.clone()
+    };
+    let mut uncached = SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), 1);
+    c.bench_function(
+        &format!("synthetic_frame_640x480_avatar_in_room_{triangles}_triangles_all_drawn"),
+        |b| b.iter(|| black_box(uncached.render(&everything, 0.0))),
     );
 
     let dir = std::env::temp_dir().join(format!("fitroom-depth-bench-{}", std::process::id()));

@@ -20,18 +20,20 @@
 
 pub mod edges;
 pub mod raster;
+mod readings;
+mod spans;
+mod still;
 
 use std::sync::Arc;
 
 use glam::Vec3;
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
 
-use crate::camera::{self, DepthCamera, HEIGHT, PIXELS, RAW_NO_VALUE, WIDTH};
+use crate::camera::{DepthCamera, PIXELS, WIDTH};
 use crate::frame::DepthFrame;
-use crate::noise::{GRAZING_LIMIT, axial_sigma_with_grazing_m, grazing_factor, lateral_sigma_px};
 pub use raster::DepthBuffer;
+use readings::{NoiseTables, splitmix64};
+use spans::Spans;
+use still::{Layer, Still};
 
 /// What a surface is, for the per-pixel ground truth.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -60,11 +62,16 @@ pub struct SceneMesh {
 #[derive(Clone, Debug, Default)]
 pub struct Scene {
     pub meshes: Vec<SceneMesh>,
+    /// How many of the first meshes stand still from frame to frame (the room): the camera
+    /// keeps their image and draws only the others each frame. It checks that they did not
+    /// change (a changed one is drawn anew), so this is a promise about speed only: the
+    /// frames are the same, bit for bit, whatever its value.
+    pub still: usize,
 }
 
 impl Scene {
     /// A floor at sensor-space height `floor_y` (negative: below the sensor) and a back
-    /// wall at depth `wall_z`, both 8 m wide.
+    /// wall at depth `wall_z`, both 8 m wide, [`Self::still`].
     pub fn room(floor_y: f32, wall_z: f32) -> Self {
         let mut scene = Self::default();
         let (w, top) = (4.0, floor_y + 3.0);
@@ -78,6 +85,7 @@ impl Scene {
             Label::Room,
         );
         scene.add_wall(wall_z, w, floor_y, top);
+        scene.still = scene.meshes.len();
         scene
     }
 
@@ -179,42 +187,24 @@ pub struct SyntheticFrame {
     pub true_depth_m: Arc<[f32]>,
 }
 
-/// Normal samples drawn once; a frame's noise indexes them with its own seeded stream (a
-/// ChaCha8 draw and a table read per sample, instead of a transcendental per sample).
-const TABLE: usize = 1 << 16;
-
-/// A pixel without a reading, in [`SyntheticCamera::sample`].
-const LOST: u32 = u32::MAX;
-
-/// Entries of a lateral offset table (12 bits of a pixel's hash).
-const LATERAL_ENTRIES: usize = 1 << 12;
-/// Lateral σ levels, from 0.8 px (facing the camera) up (see [`lateral_level`]).
-const LATERAL_LEVELS: usize = 16;
-
 /// The synthetic depth camera.
 pub struct SyntheticCamera {
     pub camera: DepthCamera,
     pub noise: NoiseSettings,
     seed: u64,
     frames: u64,
-    normals: Vec<f32>,
-    /// Per `cos² θ` in 1/1024 steps: the lateral σ level and the grazing factor
-    /// `θ² / (π/2 - θ)²` of the axial σ, so no pixel computes an arc cosine.
-    facing_table: Vec<(u8, f32)>,
-    /// Per lateral σ level, whole-pixel offsets `round(σ g)` for normal samples `g`: a
-    /// pixel's lateral error is two table reads.
-    lateral_offsets: Vec<[i8; LATERAL_ENTRIES]>,
-    /// Per raw value: the axial σ facing the camera and its grazing coefficient, in raw
-    /// steps (see [`axial_sigma_raw`]).
-    axial_table: Vec<(f32, f32)>,
-    /// `1 / |r|²` of each pixel's ray (see [`raster::DepthBuffer::normal_dot_ray`]).
-    inverse_ray2: Vec<f32>,
-    view: DepthBuffer,
-    /// Per pixel, the pixel its reading comes from ([`LOST`]: none) and its axial error in
-    /// raw steps (scratch of [`Self::render`]).
-    sample: Vec<u32>,
-    axial_noise: Vec<f32>,
-    edges: edges::EdgeFlags,
+    tables: NoiseTables,
+    /// The frame's frame-independent images ([`still::Layer`]).
+    work: Layer,
+    still: Still,
+    /// Whether `work` is the still layer but in `dirty` (else it is anything).
+    on_still: bool,
+    /// The pixels where `work` differs from the still layer.
+    dirty: Spans,
+    /// Scratch: the pixels where `work` changed since the last frame, and a frame's
+    /// neighbours of its moving meshes.
+    changed: Spans,
+    scratch: Spans,
     /// The last frame's images, reused when the caller has dropped them (no fresh pages
     /// per frame).
     spare: Option<SyntheticFrame>,
@@ -222,172 +212,103 @@ pub struct SyntheticCamera {
 
 impl SyntheticCamera {
     pub fn new(camera: DepthCamera, noise: NoiseSettings, seed: u64) -> Self {
-        let mut rng = ChaCha8Rng::seed_from_u64(0x6b69_6e65_6374);
-        let normals: Vec<f32> = (0..TABLE)
-            .map(|_| StandardNormal.sample(&mut rng))
-            .collect();
-        let lateral_offsets = (0..LATERAL_LEVELS)
-            .map(|level| {
-                let sigma = lateral_sigma_of_level(level);
-                std::array::from_fn(|m| (sigma * normals[m]).round().clamp(-127.0, 127.0) as i8)
-            })
-            .collect();
         Self {
             camera,
             noise,
             seed,
             frames: 0,
-            normals,
-            facing_table: (0..=FACING_STEPS)
-                .map(|k| {
-                    let theta = facing_angle((k as f32 / FACING_STEPS as f32).sqrt());
-                    (
-                        lateral_level(lateral_sigma_px(theta)),
-                        grazing_factor(theta),
-                    )
-                })
-                .collect(),
-            lateral_offsets,
-            axial_table: (0..=RAW_NO_VALUE).map(axial_sigma_raw).collect(),
-            inverse_ray2: raster::inverse_ray_length_squared(&camera),
-            view: DepthBuffer::default(),
-            sample: vec![LOST; PIXELS],
-            axial_noise: vec![0.0; PIXELS],
-            edges: edges::EdgeFlags::default(),
+            tables: NoiseTables::new(camera),
+            work: Layer::default(),
+            still: Still::default(),
+            on_still: false,
+            dirty: Spans::empty(),
+            changed: Spans::empty(),
+            scratch: Spans::empty(),
             spare: None,
         }
     }
 
-    /// Renders the next frame of `scene`, `time_s` seconds into the stream.
+    /// Renders the next frame of `scene`, `time_s` seconds into the stream. The scene's
+    /// [`Scene::still`] meshes are drawn once and kept while they stay the same; the others
+    /// are drawn every frame.
     pub fn render(&mut self, scene: &Scene, time_s: f64) -> SyntheticFrame {
         let index = self.frames;
         self.frames += 1;
         let stream = splitmix64(self.seed ^ index.wrapping_mul(0x9e37_79b9_7f4a_7c15));
-        let cam = self.camera;
-        self.view.clear();
-        for m in &scene.meshes {
-            self.view
-                .draw(&cam, &m.positions, &m.triangles, m.label as u8, m.closed);
+        let (cam, n) = (self.camera, self.noise);
+        if self.tables.camera() != cam {
+            self.tables = NoiseTables::new(cam);
         }
+        // Where the frame-independent images change since the last frame (`None`: all).
+        let still_meshes = scene.still.min(scene.meshes.len());
+        let (still, moving) = scene.meshes.split_at(still_meshes);
+        let layer = if still.is_empty() {
+            None
+        } else {
+            self.still.layer(still, &cam, n, &self.tables)
+        };
+        let changed = match layer {
+            Some((layer, made)) => {
+                let whole = made || !self.on_still;
+                if whole {
+                    self.work.clone_from(layer);
+                } else {
+                    self.work.copy_spans(layer, &self.dirty);
+                }
+                let spans = (&mut self.scratch, &mut self.changed);
+                self.work
+                    .render_over(moving, layer, &cam, n, &self.tables, spans);
+                // The pixels that changed: those drawn last frame, and this frame's.
+                std::mem::swap(&mut self.dirty, &mut self.changed);
+                self.changed.union(&self.dirty);
+                self.on_still = true;
+                (!whole).then_some(&self.changed)
+            }
+            None => {
+                self.work.render_all(&scene.meshes, &cam, n, &self.tables);
+                self.on_still = false;
+                None
+            }
+        };
         let mut images = Images::take(self.spare.take());
+        let view = &self.work.view;
+        let true_z = Arc::make_mut(&mut images.true_z);
+        let labels = Arc::make_mut(&mut images.labels);
+        // The recycled images are the last frame's: only what changed is written.
+        let (true_spans, label_spans) = (
+            changed.filter(|_| images.recycled_true_z),
+            changed.filter(|_| images.recycled_labels),
+        );
+        copy_rows(true_z, &view.inverse_z, true_spans, |v| {
+            if v > 0.0 { 1.0 / v } else { f32::INFINITY }
+        });
+        copy_rows(labels, &view.label, label_spans, |l| l);
         // Unique by construction (`Images::take`): no copy is made here.
         let out_mm = Arc::make_mut(&mut images.depth_mm);
         let out_raw = Arc::make_mut(&mut images.raw);
-        let iz = &self.view.inverse_z;
-        for (t, &v) in Arc::make_mut(&mut images.true_z).iter_mut().zip(iz) {
-            *t = if v > 0.0 { 1.0 / v } else { f32::INFINITY };
-        }
-        Arc::make_mut(&mut images.labels).copy_from_slice(&self.view.label);
-        self.edges
-            .compute(iz, &cam, self.noise.shadow, self.noise.dropouts);
-        let flags = &self.edges.flags;
-        out_raw.fill(RAW_NO_VALUE);
-        out_mm.fill(0);
-        let n = self.noise;
-        let cos2_limit = GRAZING_LIMIT.cos().powi(2);
-        let (iz_far, iz_near) = (1.0 / cam.max_m, 1.0 / cam.min_m);
-        let mm_of_raw = camera::raw_mm_table();
-        let (width, height) = (WIDTH as isize, HEIGHT as isize);
-        // Two passes, each with short chains of dependent reads (one long chain per pixel
-        // leaves the processor waiting): first, per pixel, whether it is lost, where its
-        // lateral error makes it read, and its axial error in raw steps; then the readings.
-        let (sample, axial) = (&mut self.sample, &mut self.axial_noise);
-        for j in 0..HEIGHT {
-            for i in 0..WIDTH {
-                let k = j * WIDTH + i;
-                sample[k] = LOST;
-                let here = iz[k];
-                if here == 0.0 {
-                    continue;
-                }
-                // One hash per pixel gives its lateral offsets, its normal sample and its
-                // coin, so that one pixel's fate does not shift the noise of the others.
-                let h = splitmix64(stream ^ k as u64);
-                // Lost: a thin part, or beside a jump on the coin's toss. One test on the
-                // combined bits: testing the coin first, as the compiler may order `||`, is a
-                // branch mispredicted on every other pixel.
-                let coin = (h >> 63) as u8;
-                if flags[k] & (edges::THIN | (edges::JUMP * coin)) != 0 {
-                    continue;
-                }
-                // How squarely the surface here faces its ray (the neighbour a lateral error
-                // reads is, but at edges, the same surface).
-                let d = self.view.normal_dot_ray[k];
-                let cos2 = (d * d * self.inverse_ray2[k]).min(1.0);
-                if n.grazing && cos2 < cos2_limit {
-                    continue;
-                }
-                let (level, grazing) =
-                    self.facing_table[round_small(cos2 * FACING_STEPS as f32) as usize];
-                let mut s = k;
-                if n.lateral {
-                    let offsets = &self.lateral_offsets[usize::from(level)];
-                    let di = offsets[(h & 0xfff) as usize] as isize;
-                    let dj = offsets[(h >> 12 & 0xfff) as usize] as isize;
-                    let si = (i as isize + di).clamp(0, width - 1);
-                    let sj = (j as isize + dj).clamp(0, height - 1);
-                    s = (sj * width + si) as usize;
-                }
-                sample[k] = s as u32;
-                // The axial σ at this pixel's own depth (the one read is within a pixel or
-                // two; σ changes little over that).
-                axial[k] = if n.axial {
-                    let raw = camera::inverse_metres_to_raw_f32(here);
-                    let index = round_small(raw.clamp(0.0, f32::from(RAW_NO_VALUE)));
-                    let (facing, per_grazing) = self.axial_table[index as usize];
-                    (facing + per_grazing * grazing) * self.normals[(h >> 32 & 0xffff) as usize]
-                } else {
-                    0.0
-                };
-            }
-        }
-        for (k, (&s, &noise)) in sample.iter().zip(axial.iter()).enumerate() {
-            if s == LOST {
-                continue;
-            }
-            let s = s as usize;
-            let seen = iz[s];
-            if seen == 0.0 || flags[s] & edges::SHADOW != 0 {
-                continue;
-            }
-            // The range is the surface's: where the pattern is matched, not where the noisy
-            // reading lands.
-            if n.range && !(iz_far..=iz_near).contains(&seen) {
-                continue;
-            }
-            // Raw values are linear in inverse depth: the reading as a continuous raw value,
-            // its axial error added in raw steps.
-            let raw = camera::inverse_metres_to_raw_f32(seen) + noise;
-            if n.quantise {
-                // The nearest raw value, if the scale holds it.
-                if (-0.5..f32::from(RAW_NO_VALUE) - 0.5).contains(&raw) {
-                    let r = round_small(raw.max(0.0));
-                    out_raw[k] = r as u16;
-                    out_mm[k] = mm_of_raw[r as usize];
-                }
-            } else if let Some(z) = camera::raw_f32_to_metres(raw) {
-                out_mm[k] = (z * 1000.0 + 0.5).min(f32::from(u16::MAX)) as u16;
-                out_raw[k] = camera::metres_to_raw(z).unwrap_or(RAW_NO_VALUE);
-            }
-        }
+        self.tables
+            .readings(n, &self.work.coefficients, stream, out_raw, out_mm);
         let frame = images.into_frame(cam, time_s, index as u32);
         self.spare = Some(frame.clone());
         frame
     }
 }
 
-/// The axial σ of Nguyen et al. ([`crate::noise`]) at the depth of raw value `raw`, in raw
-/// steps: facing the camera, and per unit of the grazing factor. A depth error `e` small
-/// against `z` moves the raw value by `e / (0.00307 z²)`; the spread facing the camera is
-/// about half a raw step at every depth (the matcher's sub-pixel precision).
-fn axial_sigma_raw(raw: u16) -> (f32, f32) {
-    let Some(z) = camera::raw_to_metres(raw) else {
-        return (0.0, 0.0);
+/// `to[k] = f(from[k])` over the pixels of `spans` (all pixels: `None`).
+fn copy_rows<T: Copy, U>(to: &mut [U], from: &[T], spans: Option<&Spans>, f: impl Fn(T) -> U) {
+    let mut rows = |r: std::ops::Range<usize>| {
+        for (t, &v) in to[r.clone()].iter_mut().zip(&from[r]) {
+            *t = f(v);
+        }
     };
-    let step = camera::raw_step_m(z);
-    let facing = axial_sigma_with_grazing_m(z, 0.0);
-    let per_grazing = axial_sigma_with_grazing_m(z, 1.0) - facing;
-    (facing / step, per_grazing / step)
+    match spans {
+        None => rows(0..PIXELS),
+        Some(spans) => {
+            for (j, r) in spans.iter() {
+                rows(j * WIDTH + r.start..j * WIDTH + r.end);
+            }
+        }
+    }
 }
 
 /// A frame's images, recycled from the frame before when its caller has dropped them.
@@ -396,15 +317,18 @@ struct Images {
     raw: Arc<[u16]>,
     labels: Arc<[u8]>,
     true_z: Arc<[f32]>,
+    /// Whether `labels` and `true_z` are the last frame's.
+    recycled_labels: bool,
+    recycled_true_z: bool,
 }
 
 impl Images {
     fn take(spare: Option<SyntheticFrame>) -> Self {
-        fn reuse<T: Copy>(a: Option<Arc<[T]>>, zero: T) -> Arc<[T]> {
+        fn reuse<T: Copy>(a: Option<Arc<[T]>>, zero: T) -> (Arc<[T]>, bool) {
             match a {
                 // The caller has dropped its frame: this is the only reference.
-                Some(a) if Arc::strong_count(&a) == 1 && Arc::weak_count(&a) == 0 => a,
-                _ => vec![zero; PIXELS].into(),
+                Some(a) if Arc::strong_count(&a) == 1 && Arc::weak_count(&a) == 0 => (a, true),
+                _ => (vec![zero; PIXELS].into(), false),
             }
         }
         let (d, r, l, t) = match spare {
@@ -416,11 +340,14 @@ impl Images {
             ),
             None => (None, None, None, None),
         };
+        let ((labels, recycled_labels), (true_z, recycled_true_z)) = (reuse(l, 0), reuse(t, 0.0));
         Self {
-            depth_mm: reuse(d, 0),
-            raw: reuse(r, 0),
-            labels: reuse(l, 0),
-            true_z: reuse(t, 0.0),
+            depth_mm: reuse(d, 0).0,
+            raw: reuse(r, 0).0,
+            labels,
+            true_z,
+            recycled_labels,
+            recycled_true_z,
         }
     }
 
@@ -438,37 +365,4 @@ impl Images {
             true_depth_m: self.true_z,
         }
     }
-}
-/// `x` rounded to the nearest integer (ties to even), for `0 <= x < 2^23`: the low bits of
-/// `x + 2^23`, whose unit is then the float's last mantissa bit. Per pixel this replaces
-/// the saturating conversion `as` compiles to, which on x86-64 is several instructions
-/// and branches (measured: a third of the time of the pass that indexes the tables).
-#[inline]
-fn round_small(x: f32) -> u32 {
-    (x + 8_388_608.0).to_bits() & 0x7f_ffff
-}
-
-/// SplitMix64 (Steele, Lea & Flood 2014): a fast, well-mixed hash of a 64-bit counter.
-fn splitmix64(x: u64) -> u64 {
-    let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
-}
-
-/// Steps of the facing table.
-const FACING_STEPS: usize = 1024;
-
-/// The level whose σ is nearest above `sigma` px (levels step 0.02 px from 0.8 px).
-fn lateral_level(sigma: f32) -> u8 {
-    (((sigma - 0.8) / 0.02).ceil().max(0.0) as usize).min(LATERAL_LEVELS - 1) as u8
-}
-
-fn lateral_sigma_of_level(level: usize) -> f32 {
-    0.8 + 0.02 * level as f32
-}
-
-/// The angle between a surface's normal and the ray from its `|cos|`.
-fn facing_angle(facing: f32) -> f32 {
-    facing.clamp(0.0, 1.0).acos()
 }

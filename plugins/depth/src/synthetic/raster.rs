@@ -10,6 +10,7 @@
 
 use glam::{Vec2, Vec3};
 
+use super::spans::Spans;
 use crate::camera::{DepthCamera, HEIGHT, PIXELS, WIDTH};
 
 /// Triangles nearer than this are left out (the device sees nothing nearer than 0.5 m; a
@@ -36,6 +37,9 @@ pub struct DepthBuffer {
     pub normal_dot_ray: Vec<f32>,
     /// Projected vertices of the mesh being drawn (pixel position, inverse depth).
     projected: Vec<(Vec2, f32)>,
+    /// The pixels triangles may have been drawn into since [`Self::clear`] (each row's
+    /// hull of the triangles' pixel boxes or spans): all a frame's moving meshes can change.
+    pub(crate) touched: Spans,
 }
 
 impl Default for DepthBuffer {
@@ -45,6 +49,7 @@ impl Default for DepthBuffer {
             label: vec![0; PIXELS],
             normal_dot_ray: vec![0.0; PIXELS],
             projected: Vec::new(),
+            touched: Spans::empty(),
         }
     }
 }
@@ -66,6 +71,7 @@ impl DepthBuffer {
     pub fn clear(&mut self) {
         self.inverse_z.fill(0.0);
         self.label.fill(0);
+        self.touched.clear();
     }
 
     /// Depth at pixel `k`, metres (infinite where nothing was drawn).
@@ -121,12 +127,8 @@ impl DepthBuffer {
             if closed && n.dot(a) >= 0.0 {
                 continue;
             }
-            let n = n.normalize_or_zero();
-            if !(n.is_finite() && (a + b + c).is_finite()) {
-                continue;
-            }
             let p = t.map(|i| projected[i as usize]);
-            self.draw_triangle(camera, p, n, label);
+            self.draw_triangle(camera, p, n, (a + b + c).is_finite(), label);
         }
         self.projected = projected;
     }
@@ -135,7 +137,8 @@ impl DepthBuffer {
         &mut self,
         camera: &DepthCamera,
         [(mut pa, mut iza), (mut pb, mut izb), (pc, izc)]: [(Vec2, f32); 3],
-        n: Vec3,
+        normal: Vec3,
+        finite: bool,
         label: u8,
     ) {
         let mut area = cross(pb - pa, pc - pa);
@@ -159,6 +162,12 @@ impl DepthBuffer {
         let hi = max.min(limit);
         let hi = Vec2::new(floor_non_negative(hi.x), floor_non_negative(hi.y));
         if lo.x > hi.x || lo.y > hi.y {
+            return;
+        }
+        // The unit normal only now: most of a distant body's triangles cover no pixel centre
+        // (a square root and a division saved on each).
+        let n = normal.normalize_or_zero();
+        if !(n.is_finite() && finite) {
             return;
         }
         // Edge e's function at (x, y) is base + dx x + dy y, inside down to its threshold
@@ -185,6 +194,9 @@ impl DepthBuffer {
         let d_base = n.x * camera.cx / camera.fx + n.y * camera.cy / camera.fy + n.z;
         let (x0, x1, y0, y1) = (lo.x as usize, hi.x as usize, lo.y as usize, hi.y as usize);
         if hi.x - lo.x < SMALL_WIDTH {
+            for j in y0..=y1 {
+                self.touched.add(j, x0, x1 + 1);
+            }
             for j in y0..=y1 {
                 let y = j as f32;
                 let row = j * WIDTH;
@@ -225,6 +237,7 @@ impl DepthBuffer {
             if x0 > x1 {
                 continue;
             }
+            self.touched.add(j, x0 as usize, x1 as usize + 1);
             let row = j * WIDTH;
             let mut iz = iz_base + iz_dy * y + iz_dx * x0;
             let mut d = d_base + d_dy * y + d_dx * x0;

@@ -1,0 +1,383 @@
+//! The error model per pixel, in two parts. What depends only on the surface a pixel sees
+//! (its depth, obliquity and edge flags) is worked out once per surface
+//! ([`NoiseTables::coefficients`]): the σ of its axial error in raw steps, its lateral σ level,
+//! whether it is beside a jump, and the raw value it can be read as. A still room's
+//! coefficients are kept from frame to frame. What is drawn anew each frame is then one
+//! branch-free pass ([`NoiseTables::readings`]): per pixel a hash, three table reads, the
+//! reading of the pixel its lateral error lands on, and the quantisation.
+//!
+//! A pixel without a reading whatever its noise (nothing seen, a part one pixel thin, a
+//! surface too oblique) has a `NaN` σ, and a pixel that cannot be read (nothing, projector
+//! shadow, out of range) a `NaN` raw value: the reading is then `NaN`, outside the raw scale,
+//! and the pixel reads nothing, without a branch.
+
+use rand::SeedableRng;
+use rand_chacha::ChaCha8Rng;
+use rand_distr::{Distribution, StandardNormal};
+
+use super::NoiseSettings;
+use super::edges::{JUMP, SHADOW, THIN};
+use super::spans::Spans;
+use crate::camera::{self, DepthCamera, HEIGHT, RAW_NO_VALUE, WIDTH};
+use crate::noise::{GRAZING_LIMIT, axial_sigma_with_grazing_m, grazing_factor, lateral_sigma_px};
+
+/// Normal samples drawn once; a frame's noise indexes them with its own seeded stream (a
+/// hash and a table read per sample, instead of a transcendental per sample).
+const TABLE: usize = 1 << 16;
+
+/// Entries of a lateral offset table (12 bits of a pixel's hash).
+const LATERAL_ENTRIES: usize = 1 << 12;
+/// Lateral σ levels, from 0.8 px (facing the camera) up (see [`lateral_level`]).
+const LATERAL_LEVELS: usize = 16;
+/// In a pixel's class: beside a jump (lost on the coin's toss); the low bits are its lateral
+/// σ level.
+const BESIDE_JUMP: u8 = 0x80;
+
+/// Steps of the facing table.
+const FACING_STEPS: usize = 1024;
+
+/// Raw values, with [`RAW_NO_VALUE`].
+const RAW_VALUES: usize = RAW_NO_VALUE as usize + 1;
+
+/// The border of [`Coefficients::source`] around the image: the largest lateral offset, in
+/// pixels (the tables' are at most 5).
+const PAD: usize = 8;
+/// A row of [`Coefficients::source`].
+const PADDED_WIDTH: usize = WIDTH + 2 * PAD;
+const PADDED_PIXELS: usize = PADDED_WIDTH * (HEIGHT + 2 * PAD);
+
+/// The error model's tables, built once per camera.
+pub struct NoiseTables {
+    normals: Box<[f32; TABLE]>,
+    /// Per `cos² θ` in 1/1024 steps: the lateral σ level and the grazing factor
+    /// `θ² / (π/2 - θ)²` of the axial σ, so no pixel computes an arc cosine.
+    facing_table: Vec<(u8, f32)>,
+    /// Per lateral σ level, whole-pixel offsets `round(σ g)` for normal samples `g`: a
+    /// pixel's lateral error is two table reads.
+    lateral_offsets: Box<[[i8; LATERAL_ENTRIES]; LATERAL_LEVELS]>,
+    /// The same, all zero: the offsets without lateral error.
+    no_offsets: Box<[[i8; LATERAL_ENTRIES]; LATERAL_LEVELS]>,
+    /// Per raw value: the axial σ facing the camera and its grazing coefficient, in raw
+    /// steps (see [`axial_sigma_raw`]).
+    axial_table: Vec<(f32, f32)>,
+    /// Millimetres per raw value ([`camera::raw_mm_table`]; 0 for [`RAW_NO_VALUE`]).
+    mm_of_raw: Box<[u16; RAW_VALUES]>,
+    /// `1 / |r|²` of each pixel's ray (see [`super::raster::DepthBuffer::normal_dot_ray`]),
+    /// for the camera of [`Self::camera`].
+    inverse_ray2: Vec<f32>,
+    camera: DepthCamera,
+}
+
+/// Per pixel, what the noise pass needs of the surface seen there ([`NoiseTables::coefficients`]).
+#[derive(Clone, Debug)]
+pub struct Coefficients {
+    /// The lateral σ level, and [`BESIDE_JUMP`].
+    pub class: Vec<u8>,
+    /// The axial σ in raw steps (0 without axial error); `NaN` where the pixel reads nothing
+    /// whatever its noise.
+    pub sigma: Vec<f32>,
+    /// The continuous raw value a pixel whose lateral error lands here reads; `NaN` where
+    /// there is nothing to read. With a border of [`PAD`] pixels repeating the image's edge
+    /// ([`padded`]), so that a lateral error that leaves the image reads its edge without
+    /// a test per pixel.
+    pub source: Vec<f32>,
+}
+
+/// The index in [`Coefficients::source`] of pixel `k`.
+#[inline]
+fn padded(k: usize) -> usize {
+    (k / WIDTH + PAD) * PADDED_WIDTH + k % WIDTH + PAD
+}
+
+impl Default for Coefficients {
+    fn default() -> Self {
+        let pixels = WIDTH * HEIGHT;
+        Self {
+            class: vec![0; pixels],
+            sigma: vec![f32::NAN; pixels],
+            source: vec![f32::NAN; PADDED_PIXELS],
+        }
+    }
+}
+
+impl Coefficients {
+    /// Copies `from`'s coefficients of the pixels of `spans`.
+    pub fn copy_spans(&mut self, from: &Coefficients, spans: &Spans) {
+        for (j, r) in spans.iter() {
+            let base = padded(j * WIDTH);
+            let p = base + r.start..base + r.end;
+            self.source[p.clone()].copy_from_slice(&from.source[p]);
+            let r = j * WIDTH + r.start..j * WIDTH + r.end;
+            self.class[r.clone()].copy_from_slice(&from.class[r.clone()]);
+            self.sigma[r.clone()].copy_from_slice(&from.sigma[r]);
+        }
+        self.pad(spans);
+    }
+
+    /// Repeats the image's edge into the border of [`Self::source`] where the pixels of
+    /// `spans` reach it.
+    fn pad(&mut self, spans: &Spans) {
+        for (j, r) in spans.iter() {
+            let (first, last) = (padded(j * WIDTH), padded(j * WIDTH + WIDTH - 1));
+            if r.start == 0 {
+                let v = self.source[first];
+                self.source[first - PAD..first].fill(v);
+            }
+            if r.end == WIDTH {
+                let v = self.source[last];
+                self.source[last + 1..=last + PAD].fill(v);
+            }
+        }
+        let (top, bottom) = (!spans.row(0).is_empty(), !spans.row(HEIGHT - 1).is_empty());
+        let row = |j: usize| (j + PAD) * PADDED_WIDTH..(j + PAD + 1) * PADDED_WIDTH;
+        for (edge, border) in [(0, 0..PAD), (HEIGHT - 1, HEIGHT + PAD..HEIGHT + 2 * PAD)] {
+            if (edge == 0 && top) || (edge != 0 && bottom) {
+                let edge_row = row(edge);
+                for b in border {
+                    let start = b * PADDED_WIDTH;
+                    self.source.copy_within(edge_row.clone(), start);
+                }
+            }
+        }
+    }
+}
+
+impl NoiseTables {
+    pub fn new(camera: DepthCamera) -> Self {
+        let mut rng = ChaCha8Rng::seed_from_u64(0x6b69_6e65_6374);
+        let normals: Box<[f32; TABLE]> =
+            Box::new(std::array::from_fn(|_| StandardNormal.sample(&mut rng)));
+        let lateral_offsets = Box::new(std::array::from_fn(|level| {
+            let sigma = lateral_sigma_of_level(level);
+            // (Within the border of `Coefficients::source`: no table entry comes near it.)
+            let most = PAD as f32;
+            std::array::from_fn(|m| (sigma * normals[m]).round().clamp(-most, most) as i8)
+        }));
+        let mm = camera::raw_mm_table();
+        Self {
+            normals,
+            facing_table: (0..=FACING_STEPS)
+                .map(|k| {
+                    let theta = facing_angle((k as f32 / FACING_STEPS as f32).sqrt());
+                    (
+                        lateral_level(lateral_sigma_px(theta)),
+                        grazing_factor(theta),
+                    )
+                })
+                .collect(),
+            lateral_offsets,
+            no_offsets: Box::new([[0; LATERAL_ENTRIES]; LATERAL_LEVELS]),
+            axial_table: (0..=RAW_NO_VALUE).map(axial_sigma_raw).collect(),
+            mm_of_raw: Box::new(std::array::from_fn(|r| mm.get(r).copied().unwrap_or(0))),
+            inverse_ray2: super::raster::inverse_ray_length_squared(&camera),
+            camera,
+        }
+    }
+
+    /// The camera the tables were built for.
+    pub fn camera(&self) -> DepthCamera {
+        self.camera
+    }
+
+    /// The coefficients of the pixels of `spans` (all pixels: `None`), from the inverse
+    /// depth `iz`, `|n · r|` and the edge flags of the surface each pixel sees.
+    pub fn coefficients(
+        &self,
+        n: NoiseSettings,
+        (iz, normal_dot_ray, flags): (&[f32], &[f32], &[u8]),
+        spans: Option<&Spans>,
+        out: &mut Coefficients,
+    ) {
+        let cos2_limit = GRAZING_LIMIT.cos().powi(2);
+        let (iz_far, iz_near) = (1.0 / self.camera.max_m, 1.0 / self.camera.min_m);
+        let (range_on, grazing_on, axial_on) = (n.range, n.grazing, n.axial);
+        // The pixels `lo..hi` of row `j`, over slices (no index tests per pixel).
+        let mut row = |j: usize, lo: usize, hi: usize| {
+            let (a, b) = (j * WIDTH + lo, j * WIDTH + hi);
+            let p = padded(j * WIDTH);
+            let pixels = iz[a..b]
+                .iter()
+                .zip(&normal_dot_ray[a..b])
+                .zip(&flags[a..b])
+                .zip(&self.inverse_ray2[a..b])
+                .zip(out.class[a..b].iter_mut().zip(&mut out.sigma[a..b]))
+                .zip(&mut out.source[p + lo..p + hi]);
+            for (((((&here, &d), &f), &inverse_ray2), (class, sigma)), source) in pixels {
+                // Without branches (edges make them unpredictable): everything is computed
+                // for every pixel, and a pixel without a reading gets `NaN`.
+                let raw = camera::inverse_metres_to_raw_f32(here);
+                // The raw value this surface is read as, if the projector lights it and it
+                // is within range (the range is the surface's: where the pattern is matched,
+                // not where the noisy reading lands).
+                let readable = (here != 0.0)
+                    & (f & SHADOW == 0)
+                    & (!range_on | (here >= iz_far) & (here <= iz_near));
+                *source = if readable { raw } else { f32::NAN };
+                // How squarely the surface here faces its ray (the neighbour a lateral error
+                // reads is, but at edges, the same surface).
+                let cos2 = (d * d * inverse_ray2).min(1.0);
+                let (level, grazing) = self.facing_table
+                    [(round_small(cos2 * FACING_STEPS as f32) as usize).min(FACING_STEPS)];
+                // The axial σ at this pixel's own depth (the one read is within a pixel or
+                // two; σ changes little over that).
+                let index = round_small(raw.clamp(0.0, f32::from(RAW_NO_VALUE)));
+                let (facing, per_grazing) = self.axial_table[index as usize % RAW_VALUES];
+                let axial = if axial_on {
+                    facing + per_grazing * grazing
+                } else {
+                    0.0
+                };
+                // No reading whatever the noise: nothing here, a part one pixel thin, or a
+                // surface too oblique.
+                let lost = (here == 0.0) | (f & THIN != 0) | (grazing_on & (cos2 < cos2_limit));
+                *sigma = if lost { f32::NAN } else { axial };
+                let jump = if f & JUMP != 0 { BESIDE_JUMP } else { 0 };
+                *class = if lost { 0 } else { level | jump };
+            }
+        };
+        match spans {
+            None => {
+                for j in 0..HEIGHT {
+                    row(j, 0, WIDTH);
+                }
+                let mut all = Spans::empty();
+                all.add(0, 0, WIDTH);
+                all.add(HEIGHT - 1, 0, WIDTH);
+                for j in 0..HEIGHT {
+                    all.add(j, 0, 1);
+                    all.add(j, WIDTH - 1, WIDTH);
+                }
+                out.pad(&all);
+            }
+            Some(spans) => {
+                for (j, r) in spans.iter() {
+                    row(j, r.start, r.end);
+                }
+                out.pad(spans);
+            }
+        }
+    }
+
+    /// One frame's readings: per pixel, from its hash in the frame's `stream`, the coin of a
+    /// pixel beside a jump, its lateral offsets and its axial error; the raw value read and
+    /// its millimetres into `out_raw` and `out_mm` ([`RAW_NO_VALUE`] and 0: none).
+    pub fn readings(
+        &self,
+        n: NoiseSettings,
+        c: &Coefficients,
+        stream: u64,
+        out_raw: &mut [u16],
+        out_mm: &mut [u16],
+    ) {
+        let offsets = if n.lateral {
+            &self.lateral_offsets
+        } else {
+            &self.no_offsets
+        };
+        let rows = c
+            .class
+            .chunks_exact(WIDTH)
+            .zip(c.sigma.chunks_exact(WIDTH))
+            .zip(
+                out_raw
+                    .chunks_exact_mut(WIDTH)
+                    .zip(out_mm.chunks_exact_mut(WIDTH)),
+            )
+            .enumerate();
+        // One hash per pixel gives its lateral offsets, its normal sample and its coin, so
+        // that one pixel's fate does not shift the noise of the others. The pixel read is
+        // `dj` rows and `di` columns away (clamped to the image by the source's border).
+        let reading = |k: usize, p: usize, class: u8, sigma: f32| {
+            let h = splitmix64(stream ^ k as u64);
+            let table = &offsets[usize::from(class) % LATERAL_LEVELS];
+            let di = isize::from(table[(h & 0xfff) as usize]);
+            let dj = isize::from(table[(h >> 12 & 0xfff) as usize]);
+            let s = p.wrapping_add_signed(dj * PADDED_WIDTH as isize + di);
+            let seen = c.source.get(s).copied().unwrap_or(f32::NAN);
+            // Raw values are linear in inverse depth: the reading as a continuous raw value,
+            // its axial error added in raw steps.
+            let raw = seen + sigma * self.normals[(h >> 32 & 0xffff) as usize];
+            // Lost beside a jump on the coin's toss: the class's top bit and the hash's.
+            let kept = (class & (h >> 56) as u8) < BESIDE_JUMP;
+            (raw, kept)
+        };
+        if n.quantise {
+            for (j, ((class, sigma), (out_raw, out_mm))) in rows {
+                let (row, p) = (j * WIDTH, padded(j * WIDTH));
+                for i in 0..WIDTH {
+                    let (raw, kept) = reading(row + i, p + i, class[i], sigma[i]);
+                    // The nearest raw value, if the scale holds it.
+                    let on_scale = kept & (raw >= -0.5) & (raw < f32::from(RAW_NO_VALUE) - 0.5);
+                    let r = if on_scale {
+                        round_small(raw.max(0.0))
+                    } else {
+                        u32::from(RAW_NO_VALUE)
+                    };
+                    out_raw[i] = r as u16;
+                    out_mm[i] = self.mm_of_raw[r as usize % RAW_VALUES];
+                }
+            }
+        } else {
+            for (j, ((class, sigma), (out_raw, out_mm))) in rows {
+                let (row, p) = (j * WIDTH, padded(j * WIDTH));
+                for i in 0..WIDTH {
+                    let (raw, kept) = reading(row + i, p + i, class[i], sigma[i]);
+                    let z = kept.then(|| camera::raw_f32_to_metres(raw)).flatten();
+                    (out_mm[i], out_raw[i]) = match z {
+                        Some(z) => (
+                            (z * 1000.0 + 0.5).min(f32::from(u16::MAX)) as u16,
+                            camera::metres_to_raw(z).unwrap_or(RAW_NO_VALUE),
+                        ),
+                        None => (0, RAW_NO_VALUE),
+                    };
+                }
+            }
+        }
+    }
+}
+
+/// The axial σ of Nguyen et al. ([`crate::noise`]) at the depth of raw value `raw`, in raw
+/// steps: facing the camera, and per unit of the grazing factor. A depth error `e` small
+/// against `z` moves the raw value by `e / (0.00307 z²)`; the spread facing the camera is
+/// about half a raw step at every depth (the matcher's sub-pixel precision).
+fn axial_sigma_raw(raw: u16) -> (f32, f32) {
+    let Some(z) = camera::raw_to_metres(raw) else {
+        return (0.0, 0.0);
+    };
+    let step = camera::raw_step_m(z);
+    let facing = axial_sigma_with_grazing_m(z, 0.0);
+    let per_grazing = axial_sigma_with_grazing_m(z, 1.0) - facing;
+    (facing / step, per_grazing / step)
+}
+
+/// `x` rounded to the nearest integer (ties to even), for `0 <= x < 2^23`: the low bits of
+/// `x + 2^23`, whose unit is then the float's last mantissa bit. Per pixel this replaces
+/// the saturating conversion `as` compiles to, which on x86-64 is several instructions
+/// and branches (measured: a third of the time of the pass that indexes the tables).
+#[inline]
+fn round_small(x: f32) -> u32 {
+    (x + 8_388_608.0).to_bits() & 0x7f_ffff
+}
+
+/// SplitMix64 (Steele, Lea & Flood 2014): a fast, well-mixed hash of a 64-bit counter.
+#[inline]
+pub fn splitmix64(x: u64) -> u64 {
+    let mut z = x.wrapping_add(0x9e37_79b9_7f4a_7c15);
+    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
+    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
+    z ^ (z >> 31)
+}
+
+/// The level whose σ is nearest above `sigma` px (levels step 0.02 px from 0.8 px).
+fn lateral_level(sigma: f32) -> u8 {
+    (((sigma - 0.8) / 0.02).ceil().max(0.0) as usize).min(LATERAL_LEVELS - 1) as u8
+}
+
+fn lateral_sigma_of_level(level: usize) -> f32 {
+    0.8 + 0.02 * level as f32
+}
+
+/// The angle between a surface's normal and the ray from its `|cos|`.
+fn facing_angle(facing: f32) -> f32 {
+    facing.clamp(0.0, 1.0).acos()
+}
