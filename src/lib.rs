@@ -68,6 +68,9 @@ pub struct AppOptions {
     pub depth_seed: u64,
     /// The performer's distance from the sensor at the clip's first frame, metres.
     pub distance_m: f32,
+    /// Replay the clip on the spot (the hip centre kept at its first-frame x and z): see
+    /// [`BvhSourceOptions::treadmill`].
+    pub treadmill: bool,
     /// How a `fakenect:DIR` recording is played.
     pub replay: sensors::Replay,
     /// What else the synthetic camera sees (a box, a second person).
@@ -117,6 +120,7 @@ impl AppOptions {
             motion,
             depth_seed: 1,
             distance_m: BvhSourceOptions::default().start_distance_m,
+            treadmill: false,
             replay: sensors::Replay::default(),
             extras: depth_scene::Extras::default(),
             image_size: UVec2::new(960, 720),
@@ -150,6 +154,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         .with_context(|| format!("cannot load the motion '{}'", options.motion.display()))?;
     let source_options = BvhSourceOptions {
         start_distance_m: options.distance_m,
+        treadmill: options.treadmill,
         ..BvhSourceOptions::default()
     };
     let source = BvhSource::from_clip(clip, source_options)
@@ -190,8 +195,13 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         sensors::SensorSpec::Synthetic => (
             Some(source),
             format!(
-                "synthetic (ground-truth skeleton of {})",
-                options.motion.display()
+                "synthetic (ground-truth skeleton of {}{})",
+                options.motion.display(),
+                if options.treadmill {
+                    ", on a treadmill"
+                } else {
+                    ""
+                }
             ),
         ),
         other => (

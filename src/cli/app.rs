@@ -42,6 +42,11 @@ pub struct Inputs {
     /// BVH clip that drives the avatar (default: the embedded assets/motions/walk.bvh).
     #[arg(long)]
     pub motion: Option<PathBuf>,
+    /// Replay the clip on a treadmill: the performer's hip centre stays where it is at the
+    /// clip's first frame (horizontally; the feet slide), so a walk stays in the sensor's
+    /// view and range.
+    #[arg(long)]
+    pub treadmill: bool,
     /// `kinect`: replay the clip through the Kinect v1 noise model (to see the filters work);
     /// `none`: the clean recording.
     #[arg(long, value_enum, default_value_t = Noise::None)]
@@ -200,6 +205,7 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         motion,
         depth_seed: inputs.seed,
         distance_m: defaults.distance_m,
+        treadmill: inputs.treadmill,
         extras: crate::depth_scene::Extras {
             box_at: inputs.synthetic_box,
             person_at: inputs.synthetic_person,

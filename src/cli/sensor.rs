@@ -204,6 +204,7 @@ fn record_synthetic(args: &RecordArgs) -> Result<RecordReport> {
         "garment": options.garment.as_ref().map(|g| g.display().to_string()),
         "size": options.garment_size,
         "distance_m": args.distance_m,
+        "treadmill": options.treadmill,
         "seed": options.depth_seed,
     });
     let body_path = args.out.join(BODY_FILE);

@@ -29,6 +29,12 @@
 //!   to the joint. `HipCenter` gets `R * G_hip(t) * C^-1`, the identity for a rest-pose
 //!   performer facing the sensor.
 //! * **Confidence** is 1.0 for every joint (clean mocap data).
+//! * **Treadmill** ([`BvhSourceOptions::treadmill`], off by default): every played frame's
+//!   positions are then moved horizontally (sensor x and z, the same shift for all joints of
+//!   the frame) so that its hip centre stays at the first played frame's `x = 0, z =
+//!   start_distance_m`. The vertical motion, the pose relative to the hip and the
+//!   orientations are unchanged; the feet slide on the floor. A walk then stays in the
+//!   sensor's view and range for as long as it plays.
 //!
 //! # Resampling
 //!
@@ -76,6 +82,14 @@ pub struct BvhSourceOptions {
     pub start_distance_m: f32,
     /// Output frame rate, frames per second (30 for Kinect v1).
     pub fps: f64,
+    /// Keep the performer on the spot, as on a treadmill: every played frame is moved
+    /// horizontally (sensor x and z) so that its hip centre is where the first played frame's
+    /// is (`x = 0, z = start_distance_m`). Heights and orientations are kept; the feet slide
+    /// backwards on the floor instead of the body travelling. For recordings that must keep
+    /// the person in the sensor's view and range over a whole walk (the clips walk towards
+    /// and past the sensor otherwise). Default off.
+    #[serde(default)]
+    pub treadmill: bool,
 }
 
 impl Default for BvhSourceOptions {
@@ -84,6 +98,7 @@ impl Default for BvhSourceOptions {
             sensor_height_m: 0.8,
             start_distance_m: 2.5,
             fps: 30.0,
+            treadmill: false,
         }
     }
 }
@@ -228,6 +243,9 @@ impl BvhSource {
         }
 
         let to_sensor_rest = REST_TO_SENSOR.inverse();
+        // With the treadmill, the first played frame's hip centre in x and z (where the
+        // placement puts it).
+        let hip_spot = placement.to_sensor(hip0);
         let samples = bvh_frames
             .iter()
             .map(|s| {
@@ -237,6 +255,13 @@ impl BvhSource {
                     out.positions[i] = placement.to_sensor(s.positions[i]);
                     out.rotations[i] =
                         (yaw * s.rotations[i] * to_sensor_rest * references[i]).normalize();
+                }
+                if options.treadmill {
+                    let hip = out.positions[HipCenter.index()];
+                    let shift = Vec3::new(hip_spot.x - hip.x, 0.0, hip_spot.z - hip.z);
+                    for position in &mut out.positions {
+                        *position += shift;
+                    }
                 }
                 out
             })

@@ -375,6 +375,63 @@ fn placement_options_move_the_performer() {
     }
 }
 
+/// The treadmill keeps the hip centre on the spot in x and z over a whole walk (the clip
+/// without it walks more than a metre), and changes nothing else: heights, every joint's
+/// position relative to the hip centre, and the orientations are those of the plain replay.
+#[test]
+fn the_treadmill_keeps_the_hip_on_the_spot_and_the_pose_unchanged() {
+    // A cgspeed walk and a MotionBuilder-style walk that veers left.
+    for file in ["07_01.bvh", "16_11.bvh"] {
+        let plain = load(file);
+        let options = BvhSourceOptions {
+            treadmill: true,
+            ..BvhSourceOptions::default()
+        };
+        let treadmill = BvhSource::load(common::clip_path(file), options)
+            .unwrap_or_else(|e| panic!("{file}: {e}"));
+        let start = pos(&plain.frame_at(0.0), HipCenter);
+        let spot = Vec3::new(0.0, 0.0, BvhSourceOptions::default().start_distance_m);
+        assert!(
+            Vec3::new(start.x, 0.0, start.z).distance(spot) < 1e-4,
+            "{file}: starts at {start}"
+        );
+        let mut travel = 0.0f32;
+        // Off the clip's frame times (interpolated frames) and past the end of the loop.
+        let end = plain.clip_duration_s() * 1.5;
+        let steps = (end / 0.0237).ceil() as usize;
+        for k in 0..steps {
+            let t = k as f64 * 0.0237;
+            let (a, b) = (plain.frame_at(t), treadmill.frame_at(t));
+            let (hip_a, hip_b) = (pos(&a, HipCenter), pos(&b, HipCenter));
+            travel = travel.max(Vec3::new(hip_a.x - start.x, 0.0, hip_a.z - start.z).length());
+            assert!(
+                (hip_b.x - spot.x).abs() < 1e-4 && (hip_b.z - spot.z).abs() < 1e-4,
+                "{file} t={t}: treadmill hip centre at {hip_b}"
+            );
+            assert!((hip_b.y - hip_a.y).abs() < 1e-5, "{file} t={t}: hip height");
+            for joint in KinectJoint::ALL {
+                let relative_a = pos(&a, joint) - hip_a;
+                let relative_b = pos(&b, joint) - hip_b;
+                assert!(
+                    relative_a.distance(relative_b) < 1e-4,
+                    "{file} t={t} {joint:?}: {relative_a} vs {relative_b}"
+                );
+                let (qa, qb) = (a.joint(joint).orientation, b.joint(joint).orientation);
+                assert!(
+                    same_rotation(qa, qb) > 1.0 - 1e-6,
+                    "{file} t={t} {joint:?}: orientation {qa} vs {qb}"
+                );
+                assert_eq!(a.joint(joint).confidence, b.joint(joint).confidence);
+            }
+        }
+        assert!(
+            travel > 1.0,
+            "{file}: the plain replay travels only {travel} m"
+        );
+    }
+    assert!(!BvhSourceOptions::default().treadmill);
+}
+
 fn lowest_foot(frame: &SensorFrame) -> f32 {
     [AnkleLeft, AnkleRight, FootLeft, FootRight]
         .iter()

@@ -78,9 +78,10 @@
 //!    ([`KinectNoiseModel::in_view`]: 57° x 43° field of view, 0.8-4.0 m depth range, the
 //!    Kinect for Windows v1 specification), treated like occlusion (an *assumption* about the
 //!    SDK; note that the clean walk clips, placed at 2.5 m, walk towards and past the sensor
-//!    and so leave the view, see `BvhSourceOptions::start_distance_m`). A hidden
-//!    joint is reported **inferred** (`confidence = inferred_confidence`, 0.5, always `<= 0.5`,
-//!    i.e. rejected by a `> 0.5` gate) at a biased, late position: a held estimate `h` starts
+//!    and so leave the view, see `BvhSourceOptions::start_distance_m`, or keep them on the
+//!    spot with `BvhSourceOptions::treadmill`). A hidden joint is reported **inferred**
+//!    (`confidence = inferred_confidence`, 0.5, always `<= 0.5`, i.e. rejected by a `> 0.5`
+//!    gate) at a biased, late position: a held estimate `h` starts
 //!    at the joint's last reported position and follows
 //!    `h += (1 - exp(-dt / inferred_lag_s)) * (target - h)` with
 //!    `target = noisy + (inferred_sigma_scale - 1) n_j + inferred_body_pull * (c - p_clean)`,
