@@ -62,8 +62,15 @@ impl Default for FloorSettings {
 
 /// Points of the lower 45 % of the image, every 4th pixel each way, sensor space.
 pub fn floor_samples(frame: &DepthFrame) -> Vec<Vec3> {
-    let camera = frame.camera;
     let mut points = Vec::new();
+    floor_samples_into(frame, &mut points);
+    points
+}
+
+/// [`floor_samples`] into `points` (cleared first), for a caller that keeps the buffer.
+pub fn floor_samples_into(frame: &DepthFrame, points: &mut Vec<Vec3>) {
+    let camera = frame.camera;
+    points.clear();
     for j in ((HEIGHT * 55 / 100)..HEIGHT).step_by(4) {
         for i in (0..WIDTH).step_by(4) {
             let mm = frame.depth_mm[j * WIDTH + i];
@@ -72,7 +79,6 @@ pub fn floor_samples(frame: &DepthFrame) -> Vec<Vec3> {
             }
         }
     }
-    points
 }
 
 /// The best-supported level plane among `points`, refined; `None` when no plane holds

@@ -2,7 +2,8 @@
 //!
 //! 1. the floor plane ([`crate::floor`]), kept from frame to frame while it still fits;
 //! 2. every reading above the floor band is joined to its 4-neighbours whose depth is within
-//!    a few centimetres (a depth edge separates objects), giving connected components;
+//!    a few centimetres (a depth edge separates objects), giving connected components
+//!    (module `components`: a scanline labelling, row by row, exactly a flood fill's result);
 //! 3. a component is a person if its size and extent are a person's: top 0.9-2.3 m above the
 //!    floor, feet near it (or cut off by the image's bottom edge), at most 2 m wide and 1.2 m
 //!    deep, and enough pixels for its distance;
@@ -17,7 +18,11 @@ use fitroom_depth::{DepthFrame, HEIGHT, PIXELS, WIDTH};
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::floor::{FloorSettings, Plane, fit_floor, floor_samples};
+use crate::floor::{FloorSettings, Plane, fit_floor, floor_samples_into};
+
+mod components;
+
+use components::Components;
 
 /// How the person is found.
 #[derive(Clone, Copy, Debug)]
@@ -71,17 +76,41 @@ pub struct Segmentation {
 pub struct Segmenter {
     pub settings: SegmentSettings,
     floor: Option<(Plane, usize)>,
-    previous: Option<Vec<bool>>,
-    /// Scratch: component of each pixel (0: none), and the depth of each reading above the
-    /// floor band (0: none).
-    component: Vec<u32>,
-    depth: Vec<f32>,
-    stack: Vec<u32>,
+    /// The last frame's person and their pixel count.
+    previous: Option<(Vec<bool>, usize)>,
+    /// Scratch, kept so that a frame allocates only the mask it returns.
+    scratch: Scratch,
 }
+
+/// Per-frame working memory of [`Segmenter::segment`].
+#[derive(Default)]
+struct Scratch {
+    /// Per pixel, the depth of a reading above the floor band (0: none), metres.
+    depth: Vec<f32>,
+    /// Per image column, the column term of a ray's height factor.
+    column: Vec<f32>,
+    components: Components,
+    /// Per component (index 0 unused), what was gathered.
+    stats: Vec<Stats>,
+    /// One row's points (x, y), heights, pixel areas, and per column `cx - i`.
+    row: Vec<f32>,
+    /// Per component, the greatest and least x and z of the ends of its runs, metres.
+    ends: Vec<[f32; 4]>,
+    /// The points the floor is fitted to or checked against.
+    floor_samples: Vec<Vec3>,
+}
+
+/// A person is narrower than this (sensor x), metres.
+const MAX_WIDTH_M: f32 = 2.0;
+/// A person is shallower than this (sensor z), metres.
+const MAX_DEPTH_M: f32 = 1.2;
 
 /// What is gathered per component.
 #[derive(Clone, Copy, Debug, Default)]
 struct Stats {
+    /// Certainly wider or deeper than a person, from a few of its pixels: nothing else was
+    /// gathered.
+    too_large: bool,
     pixels: usize,
     sum: Vec3,
     min: Vec3,
@@ -109,11 +138,12 @@ impl Stats {
 
     fn looks_like_a_person(&self, settings: &SegmentSettings) -> bool {
         let extent = self.max - self.min;
-        self.area_m2 >= settings.min_area_m2
+        !self.too_large
+            && self.area_m2 >= settings.min_area_m2
             && (0.9..2.3).contains(&self.top_m)
             && (self.bottom_m < 0.5 || self.touches_bottom_row)
-            && extent.x < 2.0
-            && extent.z < 1.2
+            && extent.x < MAX_WIDTH_M
+            && extent.z < MAX_DEPTH_M
     }
 }
 
@@ -137,93 +167,14 @@ impl Segmenter {
             return None;
         }
         let floor = self.floor(frame)?;
-        let camera = frame.camera;
         let s = self.settings;
-        // Depths of the readings above the floor band (0: none). A pixel's point is z times
-        // its ray `r = ((cx - i) / fx, (cy - j) / fy, 1)`, so its height is `z (n · r) + d`,
-        // and `n · r` is a column term plus a row term.
-        let column: Vec<f32> = (0..WIDTH)
-            .map(|i| floor.normal.x * (camera.cx - i as f32) / camera.fx)
-            .collect();
-        self.depth.clear();
-        self.depth.resize(PIXELS, 0.0);
-        for (j, (out, mm)) in self
-            .depth
-            .chunks_exact_mut(WIDTH)
-            .zip(frame.depth_mm.chunks_exact(WIDTH))
-            .enumerate()
-        {
-            let row = floor.normal.y * (camera.cy - j as f32) / camera.fy + floor.normal.z;
-            for ((out, &mm), &col) in out.iter_mut().zip(mm).zip(&column) {
-                let z = f32::from(mm) * 0.001;
-                let noise = axial_sigma_with_grazing_m(z, 0.0);
-                let above = z * (col + row) + floor.d > s.floor_band_m + 3.0 * noise;
-                *out = if mm > 0 && above { z } else { 0.0 };
-            }
-        }
-        let depth = &self.depth;
-        let point = |k: usize| {
-            let z = depth[k];
-            (z > 0.0).then(|| camera.unproject((k % WIDTH) as f32, (k / WIDTH) as f32, z))
-        };
-        self.component.clear();
-        self.component.resize(PIXELS, 0);
-        let mut stats = vec![Stats::new()];
-        let pixel_area = |z: f32| (z / camera.fx) * (z / camera.fy);
-        for seed in 0..PIXELS {
-            if depth[seed] == 0.0 || self.component[seed] != 0 {
-                continue;
-            }
-            let id = stats.len() as u32;
-            let mut c = Stats::new();
-            self.stack.clear();
-            self.stack.push(seed as u32);
-            self.component[seed] = id;
-            while let Some(k) = self.stack.pop() {
-                let k = k as usize;
-                let Some(p) = point(k) else { continue };
-                let (i, j) = (k % WIDTH, k / WIDTH);
-                c.pixels += 1;
-                c.sum += p;
-                c.min = c.min.min(p);
-                c.max = c.max.max(p);
-                let h = floor.height(p);
-                c.top_m = c.top_m.max(h);
-                c.bottom_m = c.bottom_m.min(h);
-                c.touches_bottom_row |= j + 1 == HEIGHT;
-                c.area_m2 += pixel_area(p.z);
-                c.bbox = [
-                    c.bbox[0].min(i as u16),
-                    c.bbox[1].min(j as u16),
-                    c.bbox[2].max(i as u16),
-                    c.bbox[3].max(j as u16),
-                ];
-                if self.previous.as_ref().is_some_and(|m| m[k]) {
-                    c.overlap += 1;
-                }
-                let mut visit = |n: usize| {
-                    let q = depth[n];
-                    if self.component[n] == 0 && q > 0.0 && (q - p.z).abs() < s.join_m + 0.03 * p.z
-                    {
-                        self.component[n] = id;
-                        self.stack.push(n as u32);
-                    }
-                };
-                if i > 0 {
-                    visit(k - 1);
-                }
-                if i + 1 < WIDTH {
-                    visit(k + 1);
-                }
-                if j > 0 {
-                    visit(k - WIDTH);
-                }
-                if j + 1 < HEIGHT {
-                    visit(k + WIDTH);
-                }
-            }
-            stats.push(c);
-        }
+        self.above_floor(frame, &floor);
+        let Scratch {
+            depth, components, ..
+        } = &mut self.scratch;
+        components.find(depth, s.join_m);
+        self.gather(frame, &floor);
+        let stats = &self.scratch.stats;
         let people: Vec<usize> = (1..stats.len())
             .filter(|&c| stats[c].looks_like_a_person(&s))
             .collect();
@@ -233,10 +184,7 @@ impl Segmenter {
         };
         // The last frame's person, while a third of their pixels are still theirs; else the
         // one nearest the interaction area.
-        let previous_pixels = self
-            .previous
-            .as_ref()
-            .map_or(0, |m| m.iter().filter(|&&b| b).count());
+        let previous_pixels = self.previous.as_ref().map_or(0, |&(_, pixels)| pixels);
         let chosen = people
             .iter()
             .copied()
@@ -252,13 +200,23 @@ impl Segmenter {
             self.previous = None;
             return None;
         };
-        let mask: Vec<bool> = self
-            .component
-            .iter()
-            .map(|&c| c as usize == chosen)
-            .collect();
-        self.previous = Some(mask.clone());
         let c = stats[chosen];
+        let chosen = chosen as u32;
+        let mut mask = vec![false; PIXELS];
+        for run in self.scratch.components.runs.iter() {
+            if run.component == chosen {
+                let row = usize::from(run.row) * WIDTH;
+                mask[row + usize::from(run.start)..row + usize::from(run.end)].fill(true);
+            }
+        }
+        // Kept in the last frame's buffer when there is one (no allocation).
+        match &mut self.previous {
+            Some((previous, pixels)) => {
+                previous.copy_from_slice(&mask);
+                *pixels = c.pixels;
+            }
+            None => self.previous = Some((mask.clone(), c.pixels)),
+        }
         Some(Segmentation {
             mask,
             pixels: c.pixels,
@@ -270,9 +228,136 @@ impl Segmenter {
         })
     }
 
+    /// Fills `scratch.depth`: the depth of each reading above the floor band, 0 elsewhere.
+    ///
+    /// A pixel's point is z times its ray `r = ((cx - i) / fx, (cy - j) / fy, 1)`, so its
+    /// height is `z (n · r) + d`, and `n · r` is a column term plus a row term. The loop has
+    /// no branch, so that it vectorises.
+    fn above_floor(&mut self, frame: &DepthFrame, floor: &Plane) {
+        let camera = frame.camera;
+        let band = self.settings.floor_band_m;
+        let Scratch { depth, column, .. } = &mut self.scratch;
+        column.clear();
+        column.extend((0..WIDTH).map(|i| floor.normal.x * (camera.cx - i as f32) / camera.fx));
+        depth.resize(PIXELS, 0.0);
+        for (j, (out, mm)) in depth
+            .chunks_exact_mut(WIDTH)
+            .zip(frame.depth_mm.chunks_exact(WIDTH))
+            .enumerate()
+        {
+            let row = floor.normal.y * (camera.cy - j as f32) / camera.fy + floor.normal.z;
+            for ((out, &mm), &col) in out.iter_mut().zip(mm).zip(column.iter()) {
+                let z = f32::from(mm) * 0.001;
+                let noise = axial_sigma_with_grazing_m(z, 0.0);
+                let above = z * (col + row) + floor.d > band + 3.0 * noise;
+                *out = if mm > 0 && above { z } else { 0.0 };
+            }
+        }
+    }
+
+    /// Gathers each component's stats, a row at a time: first each reading's point, height
+    /// and area in a loop without branches (it vectorises: the divisions dominate), then each
+    /// run's sums, least and greatest values in eight interleaved lanes (they vectorise too).
+    /// Sums are therefore taken in another order than the flood fill's (which took them
+    /// pixel by pixel in its own order); everything else is exact.
+    ///
+    /// Components that the ends of their runs alone show wider or deeper than a person (the
+    /// back wall) are skipped: their extent is at least that of those pixels (the same
+    /// values, and rounding is monotonic), so they would not have been people.
+    fn gather(&mut self, frame: &DepthFrame, floor: &Plane) {
+        let camera = frame.camera;
+        let previous = self.previous.as_ref().map(|(mask, _)| mask);
+        let Scratch {
+            depth,
+            components,
+            stats,
+            row,
+            ends,
+            ..
+        } = &mut self.scratch;
+        row.resize(5 * WIDTH, 0.0);
+        let (x, rest) = row.split_at_mut(WIDTH);
+        let (y, rest) = rest.split_at_mut(WIDTH);
+        let (h, rest) = rest.split_at_mut(WIDTH);
+        let (area, dx) = rest.split_at_mut(WIDTH);
+        for (i, dx) in dx.iter_mut().enumerate() {
+            *dx = camera.cx - i as f32;
+        }
+        // As `camera.unproject`, bit for bit.
+        let x_at = |i: usize, z: f32| dx[i] * z / camera.fx;
+        ends.clear();
+        ends.resize(
+            components.count + 1,
+            [
+                f32::NEG_INFINITY,
+                f32::INFINITY,
+                f32::NEG_INFINITY,
+                f32::INFINITY,
+            ],
+        );
+        for run in &components.runs {
+            let e = &mut ends[run.component as usize];
+            let row = usize::from(run.row) * WIDTH;
+            for i in [usize::from(run.start), usize::from(run.end) - 1] {
+                let (x, z) = (x_at(i, depth[row + i]), depth[row + i]);
+                *e = [e[0].max(x), e[1].min(x), e[2].max(z), e[3].min(z)];
+            }
+        }
+        stats.clear();
+        stats.extend(ends.iter().map(|e| Stats {
+            too_large: e[0] - e[1] >= MAX_WIDTH_M || e[2] - e[3] >= MAX_DEPTH_M,
+            ..Stats::new()
+        }));
+        for runs in components.runs.chunk_by(|a, b| a.row == b.row) {
+            let mut kept = runs
+                .iter()
+                .filter(|r| !stats[r.component as usize].too_large);
+            let Some(first) = kept.next() else {
+                continue;
+            };
+            let span = usize::from(first.start)..usize::from(kept.next_back().unwrap_or(first).end);
+            let j = usize::from(first.row);
+            let z = &depth[j * WIDTH..(j + 1) * WIDTH];
+            // As `camera.unproject`, `floor.height` and `(z / fx) (z / fy)`, bit for bit.
+            let dy = camera.cy - j as f32;
+            for i in span {
+                let p = Vec3::new(dx[i] * z[i] / camera.fx, dy * z[i] / camera.fy, z[i]);
+                (x[i], y[i], h[i]) = (p.x, p.y, floor.height(p));
+                area[i] = (z[i] / camera.fx) * (z[i] / camera.fy);
+            }
+            for run in runs {
+                let c = &mut stats[run.component as usize];
+                if c.too_large {
+                    continue;
+                }
+                let pixels = usize::from(run.start)..usize::from(run.end);
+                let [mx, my, mz, mh] = [&*x, &*y, z, &*h].map(|v| min_max(&v[pixels.clone()]));
+                c.min = c.min.min(Vec3::new(mx.0, my.0, mz.0));
+                c.max = c.max.max(Vec3::new(mx.1, my.1, mz.1));
+                c.top_m = c.top_m.max(mh.1);
+                c.bottom_m = c.bottom_m.min(mh.0);
+                let [sx, sy, sz, sa] = [&*x, &*y, z, &*area].map(|v| sum(&v[pixels.clone()]));
+                c.sum += Vec3::new(sx, sy, sz);
+                c.area_m2 += sa;
+                c.pixels += pixels.len();
+                c.touches_bottom_row |= j + 1 == HEIGHT;
+                c.bbox = [
+                    c.bbox[0].min(run.start),
+                    c.bbox[1].min(run.row),
+                    c.bbox[2].max(run.end - 1),
+                    c.bbox[3].max(run.row),
+                ];
+                if let Some(previous) = previous {
+                    c.overlap += previous[j * WIDTH..][pixels].iter().filter(|&&b| b).count();
+                }
+            }
+        }
+    }
+
     /// The floor: the last one while it still holds most of its support, else fitted anew.
     fn floor(&mut self, frame: &DepthFrame) -> Option<Plane> {
-        let samples = floor_samples(frame);
+        let samples = &mut self.scratch.floor_samples;
+        floor_samples_into(frame, samples);
         if let Some((plane, support)) = self.floor {
             let now = samples
                 .iter()
@@ -282,7 +367,42 @@ impl Segmenter {
                 return Some(plane);
             }
         }
-        self.floor = fit_floor(&samples, &self.settings.floor);
+        self.floor = fit_floor(samples, &self.settings.floor);
         self.floor.map(|(plane, _)| plane)
     }
+}
+
+/// The sum of `values`, in eight interleaved partial sums (so that it vectorises).
+fn sum(values: &[f32]) -> f32 {
+    let mut lanes = [0.0; 8];
+    let chunks = values.chunks_exact(8);
+    let rest: f32 = chunks.remainder().iter().sum();
+    for chunk in chunks {
+        for (lane, &v) in lanes.iter_mut().zip(chunk) {
+            *lane += v;
+        }
+    }
+    lanes.iter().sum::<f32>() + rest
+}
+
+/// The least and greatest of `values` (none is NaN), in eight interleaved lanes.
+fn min_max(values: &[f32]) -> (f32, f32) {
+    let (mut low, mut high) = ([f32::INFINITY; 8], [f32::NEG_INFINITY; 8]);
+    let chunks = values.chunks_exact(8);
+    for &v in chunks.remainder() {
+        (low[0], high[0]) = (
+            if v < low[0] { v } else { low[0] },
+            if v > high[0] { v } else { high[0] },
+        );
+    }
+    for chunk in chunks {
+        for ((low, high), &v) in low.iter_mut().zip(&mut high).zip(chunk) {
+            *low = if v < *low { v } else { *low };
+            *high = if v > *high { v } else { *high };
+        }
+    }
+    (
+        low.into_iter().fold(f32::INFINITY, f32::min),
+        high.into_iter().fold(f32::NEG_INFINITY, f32::max),
+    )
 }
