@@ -289,7 +289,8 @@ pub fn tpose_direction(joint: KinectJoint) -> Vec3 {
 /// shortest arc onto the T-pose direction of its sensor bone (where the sensor's reference is
 /// defined and well conditioned), expressed in that reference. MakeHuman's rest forearms point
 /// half forward; taking the reference at the rest direction itself would twist them.
-fn twist_correction(rest_rotation: Quat, joint: KinectJoint) -> Quat {
+/// (Public so a source with the avatar's own rig, the depth tracker, can report `Q = G C⁻¹`.)
+pub fn twist_correction(rest_rotation: Quat, joint: KinectJoint) -> Quat {
     let rest_dir = rest_rotation * Vec3::Y;
     let tpose = tpose_direction(joint);
     let swung = Quat::from_rotation_arc(rest_dir, tpose) * rest_rotation;

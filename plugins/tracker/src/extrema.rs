@@ -219,13 +219,18 @@ fn label(found: &mut [Extremum], centre: Vec3, floor: &Plane) {
         }
         _ => {}
     }
-    // The head: of the ends well above the centre, the nearest to it along the surface (the
-    // head sits on the trunk; a hand raised above it is an arm's length farther).
+    // The head: of the ends well above the centre, the one highest and nearest the body's
+    // axis (the head sits on the trunk; a raised hand is off to the side, a broad shoulder's
+    // bulge lower down).
+    let head_score = |e: &Extremum| {
+        let off = Vec3::new(e.position.x - centre.x, 0.0, e.position.z - centre.z).length();
+        height(e) - 1.5 * off
+    };
     let head = order
         .iter()
         .copied()
         .filter(|&i| found[i].part == Part::Other && height(&found[i]) > centre_height + 0.3)
-        .min_by(|&a, &b| found[a].geodesic_m.total_cmp(&found[b].geodesic_m));
+        .max_by(|&a, &b| head_score(&found[a]).total_cmp(&head_score(&found[b])));
     if let Some(h) = head {
         found[h].part = Part::Head;
     }

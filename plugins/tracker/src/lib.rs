@@ -7,13 +7,24 @@
 
 #![forbid(unsafe_code)]
 
+pub mod draw;
+pub mod eval;
 pub mod extrema;
+pub mod fit;
 pub mod floor;
+pub mod kinect;
+pub mod model;
 pub mod segment;
+pub mod silhouette;
+pub mod surface;
+pub mod tracker;
 
 #[cfg(feature = "plugin")]
 pub mod plugin;
 
 pub use extrema::{Extremum, Part, geodesic_extrema};
+pub use fit::{FitSettings, FitStats};
 pub use floor::Plane;
+pub use model::{ModelError, Pose, TrackBody};
 pub use segment::{SegmentSettings, Segmentation, Segmenter};
+pub use tracker::{Confidence, Tracked, TrackedJointOut, Tracker, TrackerSettings};

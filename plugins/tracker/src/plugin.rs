@@ -1,17 +1,27 @@
-//! Bevy adapter: the person's pixels in each new depth frame ([`UserMap`]), found in the
-//! app's `Track` stage from [`DepthFeed`]. A frame without a person clears the map; the
-//! segmenter keeps its floor and its last person between frames.
+//! Bevy adapter: the tracker on each new depth frame of [`DepthFeed`], in the app's `Track`
+//! stage. Out come the person's pixels ([`UserMap`]) and their skeleton
+//! ([`TrackedSkeleton`]); where depth is the only sensor ([`SkeletonFromDepth`]), each
+//! skeleton also joins the [`SensorFeed`] as a Kinect v1 frame, so the motion pipeline
+//! (gate, filter, retarget, limits, foot skate) runs on it as on a BVH clip's.
+//!
+//! The tracker fits the unshaped body of [`AvatarBody`] (the person is not the avatar's
+//! shape: it sizes the body to them as it tracks); it is made when that body first exists.
 
 use bevy::prelude::*;
+use fitroom_body::plugin::AvatarBody;
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_schedule::FitroomSystems;
+use fitroom_sensor::SensorFrame;
+use fitroom_sensor::plugin::SensorFeed;
 
-use crate::segment::{SegmentSettings, Segmentation, Segmenter};
+use crate::model::TrackBody;
+use crate::segment::Segmentation;
+use crate::tracker::{Tracked, Tracker, TrackerSettings};
 
 /// Systems of the tracker plugin.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 pub enum TrackerSystems {
-    Segment,
+    Track,
 }
 
 /// The person in the newest depth frame.
@@ -21,13 +31,36 @@ pub struct UserMap {
     pub person: Option<Segmentation>,
     /// The depth frame (its count in [`DepthFeed`]) this map is of.
     pub frame: u64,
-    /// Time to segment that frame, milliseconds.
-    pub segment_ms: f64,
+    /// Time to segment and track that frame, milliseconds.
+    pub track_ms: f64,
 }
 
-/// The segmenter, kept between frames.
+/// The skeleton in the newest depth frame.
+#[derive(Resource, Default)]
+pub struct TrackedSkeleton {
+    /// `None`: nobody tracked.
+    pub latest: Option<Tracked>,
+    /// Fits (re)started from the extrema since the app started.
+    pub starts: usize,
+    /// Why there is no tracker (its body could not be made), if so.
+    pub error: Option<String>,
+}
+
+/// Present when depth is the only sensor (a recording, a Kinect): the tracker's skeletons
+/// feed the motion pipeline.
 #[derive(Resource)]
-struct ActiveSegmenter(Segmenter);
+pub struct SkeletonFromDepth;
+
+/// The tracker, made once the avatar's body exists.
+#[derive(Resource, Default)]
+struct ActiveTracker {
+    tracker: Option<Tracker>,
+    sequence: u64,
+    /// Added to the depth frames' times so the skeleton's never run backwards (a looping
+    /// recording starts its clock again), and the last time given.
+    time_offset_s: f64,
+    last_time_s: Option<f64>,
+}
 
 pub struct TrackerPlugin;
 
@@ -35,27 +68,72 @@ impl Plugin for TrackerPlugin {
     fn build(&self, app: &mut App) {
         fitroom_schedule::ensure(app);
         app.init_resource::<UserMap>()
-            .insert_resource(ActiveSegmenter(Segmenter::new(SegmentSettings::default())))
+            .init_resource::<TrackedSkeleton>()
+            .init_resource::<ActiveTracker>()
             .configure_sets(
                 PostUpdate,
-                TrackerSystems::Segment.in_set(FitroomSystems::Track),
+                TrackerSystems::Track.in_set(FitroomSystems::Track),
             )
-            .add_systems(PostUpdate, segment.in_set(TrackerSystems::Segment));
+            .add_systems(PostUpdate, track.in_set(TrackerSystems::Track));
     }
 }
 
-fn segment(
-    feed: Option<Res<DepthFeed>>,
-    mut segmenter: ResMut<ActiveSegmenter>,
+fn track(
+    depth: Option<Res<DepthFeed>>,
+    body: Option<Res<AvatarBody>>,
+    from_depth: Option<Res<SkeletonFromDepth>>,
+    mut active: ResMut<ActiveTracker>,
     mut map: ResMut<UserMap>,
+    mut skeleton: ResMut<TrackedSkeleton>,
+    mut sensor: ResMut<SensorFeed>,
 ) {
-    let Some(feed) = feed else { return };
-    if feed.frames_received == map.frame {
+    let Some(depth) = depth else { return };
+    if depth.frames_received == map.frame {
         return;
     }
-    let Some(frame) = &feed.latest else { return };
+    let Some(frame) = &depth.latest else { return };
+    if active.tracker.is_none() && skeleton.error.is_none() {
+        let Some(body) = body else { return };
+        match TrackBody::new(&body.model, &body.model.positions) {
+            Ok(model) => active.tracker = Some(Tracker::new(model, TrackerSettings::default())),
+            Err(e) => {
+                warn!("no skeleton tracker: {e}");
+                skeleton.error = Some(e.to_string());
+            }
+        }
+    }
+    let Some(tracker) = active.tracker.as_mut() else {
+        return;
+    };
     let start = std::time::Instant::now();
-    map.person = segmenter.0.segment(frame);
-    map.frame = feed.frames_received;
-    map.segment_ms = start.elapsed().as_secs_f64() * 1e3;
+    let tracked = tracker.track(frame);
+    map.track_ms = start.elapsed().as_secs_f64() * 1e3;
+    map.frame = depth.frames_received;
+    map.person = tracked.as_ref().map(|t| t.person.clone());
+    skeleton.starts = tracker.starts;
+    if from_depth.is_some() {
+        let mut time_s = frame.time_s + active.time_offset_s;
+        if let Some(last) = active.last_time_s
+            && time_s <= last
+        {
+            active.time_offset_s = last + 1.0 / 30.0 - frame.time_s;
+            time_s = last + 1.0 / 30.0;
+        }
+        active.last_time_s = Some(time_s);
+        // Nobody tracked: a frame with every joint not tracked, so the kiosk sees the gap.
+        let sequence = active.sequence;
+        let out = match &tracked {
+            Some(t) => t.sensor_frame(time_s, sequence),
+            None => SensorFrame {
+                timestamp_s: time_s,
+                sequence,
+                joints: Default::default(),
+            },
+        };
+        active.sequence += 1;
+        sensor.frames_received += 1;
+        sensor.latest = Some(out.clone());
+        sensor.new_frames.push(out);
+    }
+    skeleton.latest = tracked;
 }

@@ -1,0 +1,138 @@
+//! Development loop for the tracker, without building the app: one recording with ground
+//! truth, the evaluation as JSON (as `fitroom track eval --json` gives), and on request:
+//!
+//! * `VERBOSE=1`: per frame, whether the fit (re)started, its statistics and each joint's error;
+//! * `SIGNED=1`: each joint's mean signed error (a bias shows here, not in the mean distance);
+//! * `PPM_FRAME=N`: frame N as a picture (`/tmp/frame.ppm`: depth, the person, the true and
+//!   the tracked skeletons);
+//! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
+//!   them costs); `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`: override the settings.
+//!
+//! CPU time per frame (this thread's, from `/proc/thread-self/schedstat`: this host's wall
+//! time is noisier) goes to stderr.
+//!
+//! `cargo run -p fitroom_tracker --no-default-features --release --example eval_dump -- DIR`
+
+use std::path::{Path, PathBuf};
+
+use fitroom_body::BodyModel;
+use fitroom_depth::DepthCamera;
+use fitroom_depth::fakenect::Recording;
+use fitroom_depth::truth::read_truth;
+use fitroom_tracker::eval::Evaluation;
+use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
+use glam::Vec3;
+
+type Error = Box<dyn std::error::Error>;
+
+fn env(key: &str) -> Option<f32> {
+    std::env::var(key).ok().and_then(|v| v.parse().ok())
+}
+
+fn settings() -> TrackerSettings {
+    let mut s = TrackerSettings::default();
+    if let Some(v) = env("ITER") {
+        s.iterations = v as usize;
+    }
+    if let Some(v) = env("POINTS") {
+        s.points = v as usize;
+    }
+    if let Some(v) = env("DAMP") {
+        s.fit.damping = v;
+    }
+    if let Some(v) = env("FREE") {
+        s.fit.free_space_weight = v;
+    }
+    if let Some(v) = env("HUBER") {
+        s.fit.huber_m = v;
+    }
+    if let Some(v) = env("OUTLIER") {
+        s.fit.outlier_m = v;
+    }
+    s.scale = env("SCALE");
+    s
+}
+
+fn main() -> Result<(), Error> {
+    let dir = PathBuf::from(std::env::args().nth(1).ok_or("usage: eval_dump DIR")?);
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
+    let model = BodyModel::read(&path)?;
+    let positions = match std::env::var("SHAPE") {
+        Ok(path) => {
+            let shape: fitroom_body::Shape = ron::from_str(&std::fs::read_to_string(path)?)?;
+            model.shaped(&shape)?.positions
+        }
+        Err(_) => model.positions.clone(),
+    };
+    let mut tracker = Tracker::new(TrackBody::new(&model, &positions)?, settings());
+    let recording = Recording::open(&dir)?;
+    let truth = read_truth(&dir)?.ok_or("the recording has no ground truth")?;
+    let picture_at: Option<usize> = std::env::var("PPM_FRAME").ok().and_then(|v| v.parse().ok());
+    let mut eval = Evaluation::new();
+    let mut signed = [(Vec3::ZERO, 0usize); 20];
+    let mut cpu_ms: Vec<f64> = Vec::new();
+    for (entry, line) in recording.depth_entries().zip(&truth) {
+        let frame = recording.read_depth(entry, DepthCamera::default())?;
+        let joints: Vec<Vec3> = line.joints.iter().map(|j| Vec3::from_array(*j)).collect();
+        let start = cpu_ns();
+        let out = eval.step(&mut tracker, &frame, &joints);
+        cpu_ms.push(cpu_ns().saturating_sub(start) as f64 / 1e6);
+        let Some(t) = out else { continue };
+        for ((sum, j), g) in signed.iter_mut().zip(&t.joints).zip(&joints) {
+            sum.0 += j.position - *g;
+            sum.1 += 1;
+        }
+        if picture_at == Some(line.frame) {
+            let mut bytes = b"P6 640 480 255\n".to_vec();
+            bytes.extend(fitroom_tracker::draw::picture(&frame, Some(&t), &joints));
+            std::fs::write("/tmp/frame.ppm", bytes)?;
+        }
+        if std::env::var("VERBOSE").is_ok() {
+            let errors: Vec<String> = t
+                .joints
+                .iter()
+                .zip(&joints)
+                .map(|(j, g)| format!("{:.0}", j.position.distance(*g) * 1000.0))
+                .collect();
+            println!(
+                "frame {} start {} inliers {:.2} outside {:.2} residual {:.1} mm scale {:.3} | {}",
+                line.frame,
+                t.started,
+                t.fit.inliers,
+                t.fit.outside,
+                t.fit.mean_residual_m * 1000.0,
+                t.pose.scale,
+                errors.join(" ")
+            );
+        }
+    }
+    cpu_ms.sort_by(f64::total_cmp);
+    if let (Some(median), Some(p95)) = (
+        cpu_ms.get(cpu_ms.len() / 2),
+        cpu_ms.get(cpu_ms.len() * 95 / 100),
+    ) {
+        eprintln!("cpu ms per frame: median {median:.2}, p95 {p95:.2}");
+    }
+    if std::env::var("SIGNED").is_ok() {
+        for (k, (sum, n)) in signed.iter().enumerate() {
+            let m = *sum / (*n).max(1) as f32 * 1000.0;
+            println!(
+                "joint {k:>2} mean signed error ({:>5.0}, {:>5.0}, {:>5.0}) mm",
+                m.x, m.y, m.z
+            );
+        }
+    }
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&eval.report(tracker.starts))?
+    );
+    Ok(())
+}
+
+/// This thread's CPU time, ns.
+fn cpu_ns() -> u64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse().ok())
+        .unwrap_or(0)
+}

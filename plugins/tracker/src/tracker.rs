@@ -1,0 +1,392 @@
+//! The skeleton tracker, frame after frame: segment the person, then either start (the body
+//! placed standing under the person, sized by their height, and fitted with the geodesic
+//! extrema as targets) or follow (the last pose fitted to the new frame). A fit that explains
+//! the frame poorly is restarted from the extrema in the same frame, and the better of the
+//! two kept. Out comes the Kinect v1 skeleton: 20 joints with positions, orientations and
+//! the SDK's three confidences.
+
+use fitroom_depth::{DepthFrame, HEIGHT, WIDTH};
+use fitroom_motion::retarget::twist_correction;
+use fitroom_sensor::{JointSample, KinectJoint, SensorFrame};
+use glam::{Quat, Vec3};
+use serde::Serialize;
+
+use crate::extrema::{Part, geodesic_extrema};
+use crate::fit::{FitSettings, FitStats, Fitter, Observation};
+use crate::model::{Pose, Posed, TrackBody};
+use crate::segment::{SegmentSettings, Segmentation, Segmenter};
+use crate::silhouette::Silhouette;
+
+/// How the tracker runs.
+#[derive(Clone, Copy, Debug)]
+pub struct TrackerSettings {
+    pub segment: SegmentSettings,
+    pub fit: FitSettings,
+    /// Points of the person sampled per frame for the fit (about).
+    pub points: usize,
+    /// Fit iterations per frame when following, and when starting.
+    pub iterations: usize,
+    pub start_iterations: usize,
+    /// Below this share of points on the model, or above this share of the model outside
+    /// the silhouette, the fit is restarted from the extrema.
+    pub min_inliers: f32,
+    pub max_outside: f32,
+    /// Points on a joint's bones that make it tracked (fewer: inferred).
+    pub min_support: u32,
+    /// The person's size as the body's scale, when known (e.g. measured); `None`: from
+    /// their height when first seen whole.
+    pub scale: Option<f32>,
+}
+
+impl Default for TrackerSettings {
+    fn default() -> Self {
+        Self {
+            segment: SegmentSettings::default(),
+            fit: FitSettings::default(),
+            points: 1200,
+            iterations: 8,
+            start_iterations: 30,
+            min_inliers: 0.6,
+            max_outside: 0.25,
+            min_support: 4,
+            scale: None,
+        }
+    }
+}
+
+/// The SDK's three joint states.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Confidence {
+    Tracked,
+    /// Seen too little (occluded, or the fit's guess): the position is inferred.
+    Inferred,
+    /// Outside the image or no one tracked.
+    NotTracked,
+}
+
+impl Confidence {
+    /// As [`JointSample::confidence`]: 1, 0.5, 0.
+    pub fn value(self) -> f32 {
+        match self {
+            Self::Tracked => 1.0,
+            Self::Inferred => 0.5,
+            Self::NotTracked => 0.0,
+        }
+    }
+}
+
+/// One joint of the tracked skeleton.
+#[derive(Clone, Copy, Debug, Serialize)]
+pub struct TrackedJointOut {
+    /// Sensor space, metres.
+    pub position: Vec3,
+    /// Its pixel in the depth image (may lie outside the image).
+    pub pixel: [f32; 2],
+    pub confidence: Confidence,
+    /// As [`JointSample::orientation`].
+    #[serde(skip)]
+    pub orientation: Quat,
+}
+
+/// What the tracker made of one frame.
+#[derive(Clone, Debug)]
+pub struct Tracked {
+    pub joints: [TrackedJointOut; KinectJoint::COUNT],
+    /// The fitted body pose.
+    pub pose: Pose,
+    pub fit: FitStats,
+    /// Whether this frame (re)started the fit from the extrema.
+    pub started: bool,
+    pub person: Segmentation,
+}
+
+impl Tracked {
+    /// The Kinect v1 skeleton frame of this result.
+    pub fn sensor_frame(&self, timestamp_s: f64, sequence: u64) -> SensorFrame {
+        let mut joints = [JointSample::default(); KinectJoint::COUNT];
+        for (out, j) in joints.iter_mut().zip(&self.joints) {
+            *out = JointSample {
+                position: j.position,
+                orientation: j.orientation,
+                confidence: j.confidence.value(),
+            };
+        }
+        SensorFrame {
+            timestamp_s,
+            sequence,
+            joints,
+        }
+    }
+}
+
+/// The tracker's state between frames.
+pub struct Tracker {
+    pub body: TrackBody,
+    pub settings: TrackerSettings,
+    segmenter: Segmenter,
+    silhouette: Silhouette,
+    fitter: Fitter,
+    posed: Posed,
+    points: Vec<Vec3>,
+    pose: Option<Pose>,
+    /// The person's size (the body's scale), measured when they were first seen whole.
+    scale: Option<f32>,
+    /// Per Kinect bone, the inverse of the motion pipeline's constant `C` (its driver's rest
+    /// frame against the sensor's T-pose reference): the orientation reported is the driver's
+    /// frame times it, so the retargeter's `G = Q C` gives back the fitted frame.
+    corrections: [Quat; KinectJoint::COUNT],
+    /// How many times the fit was (re)started.
+    pub starts: usize,
+}
+
+impl Tracker {
+    pub fn new(body: TrackBody, settings: TrackerSettings) -> Self {
+        let mut corrections = [Quat::IDENTITY; KinectJoint::COUNT];
+        for joint in KinectJoint::ALL {
+            if joint.parent().is_some() {
+                let rest = body.rest_driver_rotations[joint.index()];
+                corrections[joint.index()] = twist_correction(rest, joint).inverse();
+            }
+        }
+        Self {
+            body,
+            segmenter: Segmenter::new(settings.segment),
+            settings,
+            silhouette: Silhouette::default(),
+            fitter: Fitter::default(),
+            posed: Posed::default(),
+            points: Vec::new(),
+            pose: None,
+            scale: None,
+            corrections,
+            starts: 0,
+        }
+    }
+
+    /// Forgets the person: the next frame starts afresh.
+    pub fn reset(&mut self) {
+        self.pose = None;
+        self.scale = None;
+        self.segmenter.reset();
+    }
+
+    /// The skeleton in `frame`, `None` when no one is there.
+    pub fn track(&mut self, frame: &DepthFrame) -> Option<Tracked> {
+        let Some(person) = self.segmenter.segment(frame) else {
+            self.pose = None;
+            self.scale = None;
+            return None;
+        };
+        self.sample_points(frame, &person);
+        self.silhouette.update(&person.mask, person.bbox);
+        let settings = self.settings;
+        let mut started = false;
+        let (pose, fit) = match self.pose.take() {
+            Some(mut pose) => {
+                let fit = self.fit(frame, &person, &mut pose, &[], settings.iterations);
+                if fit.inliers < settings.min_inliers || fit.outside > settings.max_outside {
+                    let (fresh, fresh_fit) = self.start(frame, &person);
+                    started = true;
+                    if score(&fresh_fit) > score(&fit) {
+                        (fresh, fresh_fit)
+                    } else {
+                        (pose, fit)
+                    }
+                } else {
+                    (pose, fit)
+                }
+            }
+            None => {
+                started = true;
+                self.start(frame, &person)
+            }
+        };
+        if !pose.is_finite() {
+            self.pose = None;
+            return None;
+        }
+        let joints = self.joints(frame, &pose);
+        self.pose = Some(pose.clone());
+        Some(Tracked {
+            joints,
+            pose,
+            fit,
+            started,
+            person,
+        })
+    }
+
+    /// About [`TrackerSettings::points`] of the person's readings on a regular grid.
+    fn sample_points(&mut self, frame: &DepthFrame, person: &Segmentation) {
+        let step = ((person.pixels as f32 / self.settings.points.max(1) as f32)
+            .sqrt()
+            .floor() as usize)
+            .max(1);
+        let [x0, y0, x1, y1] = person.bbox.map(usize::from);
+        self.points.clear();
+        for y in (y0..=y1.min(HEIGHT - 1)).step_by(step) {
+            for x in (x0..=x1.min(WIDTH - 1)).step_by(step) {
+                let k = y * WIDTH + x;
+                let mm = frame.depth_mm[k];
+                if person.mask[k] && mm > 0 {
+                    let z = f32::from(mm) / 1000.0;
+                    self.points
+                        .push(frame.camera.unproject(x as f32, y as f32, z));
+                }
+            }
+        }
+    }
+
+    fn fit(
+        &mut self,
+        frame: &DepthFrame,
+        person: &Segmentation,
+        pose: &mut Pose,
+        targets: &[(usize, Vec3, f32)],
+        iterations: usize,
+    ) -> FitStats {
+        let obs = Observation {
+            frame,
+            mask: &person.mask,
+            silhouette: &self.silhouette,
+            points: &self.points,
+            targets,
+        };
+        self.fitter
+            .fit(&self.body, pose, &obs, &self.settings.fit, iterations)
+    }
+
+    /// Starts from nothing: the body standing under the person, sized by their height,
+    /// pulled to the geodesic extrema, then fitted to the depth alone.
+    fn start(&mut self, frame: &DepthFrame, person: &Segmentation) -> (Pose, FitStats) {
+        self.starts += 1;
+        let floor = person.floor;
+        let ends = geodesic_extrema(frame, person);
+        // The head's end, if it is one: near the top of the person and above their middle (a
+        // broad shoulder can pass for it).
+        let head = ends
+            .iter()
+            .find(|e| e.part == Part::Head)
+            .map(|e| e.position)
+            .filter(|h| {
+                floor.height(*h) > person.top_m - 0.3 && (h.x - person.centroid.x).abs() < 0.25
+            });
+        // The person's height: the top of what is seen, unless that is a raised hand; then
+        // the highest point near the head's end.
+        let whole = usize::from(person.bbox[3]) + 1 < HEIGHT && usize::from(person.bbox[1]) > 0;
+        let hand_on_top = ends.iter().any(|e| {
+            matches!(e.part, Part::HandLeft | Part::HandRight)
+                && floor.height(e.position) > person.top_m - 0.1
+        });
+        let top = match (hand_on_top, head) {
+            (false, _) => Some(person.top_m),
+            (true, Some(h)) => Some(
+                self.points
+                    .iter()
+                    .filter(|p| (p.x - h.x).abs() < 0.1 && (p.z - h.z).abs() < 0.25)
+                    .map(|&p| floor.height(p))
+                    .fold(floor.height(h), f32::max),
+            ),
+            (true, None) => None,
+        };
+        let scale = match (self.settings.scale.or(self.scale), top) {
+            (Some(s), _) => s,
+            (None, Some(top)) if whole => {
+                let s = (top / self.body.height_m).clamp(0.75, 1.3);
+                self.scale = Some(s);
+                s
+            }
+            // Not measurable yet (cut off, or arms up and no head found): the body's own
+            // size until the person is seen whole.
+            _ => 1.0,
+        };
+        // Beneath the centroid of what is seen, half a body's depth behind it.
+        let centre = person.centroid + person.centroid.normalize_or_zero() * 0.08 * scale;
+        let spot = centre - floor.normal * floor.height(centre);
+        let mut pose = self.body.standing(Vec3::ZERO, scale);
+        let up = Quat::from_rotation_arc(Vec3::Y, floor.normal);
+        pose.rotation = (up * pose.rotation).normalize();
+        pose.translation = spot - pose.rotation * (Vec3::Y * self.body.sole_y * scale);
+        let targets: Vec<(usize, Vec3, f32)> = ends
+            .iter()
+            .filter_map(|e| {
+                let joint = match e.part {
+                    Part::Head if head.is_some() => KinectJoint::Head,
+                    Part::Head => return None,
+                    Part::HandLeft => KinectJoint::HandLeft,
+                    Part::HandRight => KinectJoint::HandRight,
+                    Part::FootLeft => KinectJoint::FootLeft,
+                    Part::FootRight => KinectJoint::FootRight,
+                    Part::Other => return None,
+                };
+                Some((joint.index(), e.joint, 1.0))
+            })
+            .collect();
+        let n = self.settings.start_iterations;
+        self.fit(frame, person, &mut pose, &targets, n);
+        let fit = self.fit(frame, person, &mut pose, &[], n / 3);
+        (pose, fit)
+    }
+
+    /// The Kinect joints of `pose`, their pixels, confidences and orientations.
+    fn joints(&mut self, frame: &DepthFrame, pose: &Pose) -> [TrackedJointOut; KinectJoint::COUNT] {
+        self.body.pose_into(pose, &mut self.posed);
+        let positions = self.body.kinect_joints(&self.posed);
+        let turns = self.body.driver_turns(&self.posed);
+        // Evidence per bone: points on its capsules in the last fit step.
+        let mut support = vec![0u32; self.body.parents.len()];
+        for (capsule, &n) in self.body.capsules.iter().zip(&self.fitter.support) {
+            support[capsule.bone] += n;
+        }
+        let camera = frame.camera;
+        let mut out = [TrackedJointOut {
+            position: Vec3::ZERO,
+            pixel: [0.0; 2],
+            confidence: Confidence::NotTracked,
+            orientation: Quat::IDENTITY,
+        }; KinectJoint::COUNT];
+        for joint in KinectJoint::ALL {
+            let k = joint.index();
+            let p = positions[k];
+            let pixel = camera.project(p).map_or([-1.0, -1.0], |v| [v.x, v.y]);
+            let in_view = (0.0..WIDTH as f32).contains(&pixel[0])
+                && (0.0..HEIGHT as f32).contains(&pixel[1])
+                && camera.in_range(p.z);
+            let evidence = support[self.body.kinect[k].0] + support[self.body.drivers[k]];
+            let confidence = if !in_view {
+                Confidence::NotTracked
+            } else if evidence >= self.settings.min_support {
+                Confidence::Tracked
+            } else {
+                Confidence::Inferred
+            };
+            let orientation = match joint.parent() {
+                None => turns[k],
+                Some(parent) => {
+                    let driver = self.posed.rotations[self.body.drivers[k]];
+                    let q = (driver * self.corrections[k]).normalize();
+                    let bone = (p - positions[parent.index()]).normalize_or_zero();
+                    let along = q * Vec3::Y;
+                    if bone == Vec3::ZERO {
+                        q
+                    } else {
+                        (Quat::from_rotation_arc(along, bone) * q).normalize()
+                    }
+                }
+            };
+            out[k] = TrackedJointOut {
+                position: p,
+                pixel,
+                confidence,
+                orientation,
+            };
+        }
+        out
+    }
+}
+
+/// Which of two fits explains the frame better.
+fn score(fit: &FitStats) -> f32 {
+    fit.inliers - fit.outside
+}

@@ -1,0 +1,122 @@
+//! What the tracker's tests and benchmark share: the shipped MakeHuman body posed by the
+//! body crate's own forward kinematics and skinning (independent of the tracker's model), its
+//! rig's 20 Kinect joints, and synthetic Kinect frames of it in a room.
+
+#![allow(dead_code)]
+
+use std::path::Path;
+
+use fitroom_body::{BodyModel, RestPose, RigidTransform, forward_kinematics};
+use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
+use fitroom_depth::{DepthCamera, DepthFrame};
+use fitroom_sensor::KinectJoint;
+use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
+use glam::{Affine3A, Quat, Vec3};
+
+pub struct Body {
+    pub model: BodyModel,
+    pub rest: RestPose,
+    pub standing: Affine3A,
+}
+
+pub fn body() -> Body {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
+    let model = BodyModel::read(&path).expect("the shipped body");
+    let rest = model.rest_pose(&model.positions);
+    let standing = model.standing_in_sensor_space(&model.positions);
+    Body {
+        model,
+        rest,
+        standing,
+    }
+}
+
+/// Model-space turns (axis, degrees) of named bones about their heads, applied parents first.
+pub type Turns<'a> = &'a [(&'a str, Vec3, f32)];
+
+impl Body {
+    pub fn bone(&self, name: &str) -> usize {
+        self.model
+            .bone_index(name)
+            .unwrap_or_else(|| panic!("the rig has {name}"))
+    }
+
+    /// Local rotations for `turns` scaled by `share` (0: rest, 1: the whole pose).
+    pub fn locals(&self, turns: Turns, share: f32) -> Vec<Quat> {
+        let mut local = vec![Quat::IDENTITY; self.model.bones.len()];
+        for &(name, axis, degrees) in turns {
+            let b = self.bone(name);
+            let globals = forward_kinematics(&self.model.bones, &self.rest, &local, Vec3::ZERO);
+            let q = Quat::from_axis_angle(axis.normalize(), (degrees * share).to_radians());
+            let g = globals[b].rotation;
+            local[b] = (local[b] * (g.inverse() * q * g)).normalize();
+        }
+        local
+    }
+
+    /// The skin and the 20 Kinect joints, sensor space, for the body standing at `spot`.
+    pub fn posed(&self, local: &[Quat], spot: Vec3) -> (Vec<Vec3>, Vec<Vec3>) {
+        let globals: Vec<RigidTransform> =
+            forward_kinematics(&self.model.bones, &self.rest, local, Vec3::ZERO);
+        let place = |p: Vec3| self.standing.transform_point3(p) + spot;
+        let skin = self
+            .model
+            .skin_positions(&self.model.positions, &self.rest, &globals);
+        let n = self.model.body_vertex_count as usize;
+        let head = |name: &str| globals[self.bone(name)].translation;
+        let joints = JOINT_BONES
+            .iter()
+            .map(|(joint, name)| {
+                let mut p = head(name);
+                if *joint == KinectJoint::Head {
+                    p += (p - head("neck_01")).normalize() * HEAD_ABOVE_SKULL_BASE_M;
+                }
+                place(p)
+            })
+            .collect();
+        (skin[..n].iter().map(|&p| place(p)).collect(), joints)
+    }
+}
+
+pub fn scene(meshes: Vec<(Vec<Vec3>, Label)>, triangles: &[[u32; 3]]) -> Scene {
+    scene_at(-0.8, meshes, triangles)
+}
+
+/// The room with the sensor `-floor_y` metres above the floor.
+pub fn scene_at(floor_y: f32, meshes: Vec<(Vec<Vec3>, Label)>, triangles: &[[u32; 3]]) -> Scene {
+    let mut scene = Scene::room(floor_y, 3.9);
+    for (positions, label) in meshes {
+        scene.meshes.push(SceneMesh {
+            positions,
+            triangles: triangles.to_vec(),
+            label,
+            closed: true,
+        });
+    }
+    scene
+}
+
+pub fn render(scene: &Scene, seed: u64, time_s: f64) -> DepthFrame {
+    SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), seed)
+        .render(scene, time_s)
+        .frame
+}
+
+pub const ARMS_OUT: Turns = &[
+    ("upperarm_l", Vec3::Z, 55.0),
+    ("upperarm_r", Vec3::Z, -55.0),
+    ("lowerarm_l", Vec3::Z, 20.0),
+];
+pub const REACH_AND_STEP: Turns = &[
+    ("upperarm_l", Vec3::X, -75.0),
+    ("lowerarm_l", Vec3::X, -50.0),
+    ("thigh_r", Vec3::X, -35.0),
+    ("calf_r", Vec3::X, 45.0),
+];
+pub const TURN_AND_CROSS: Turns = &[
+    ("spine_01", Vec3::Y, 20.0),
+    ("spine_01", Vec3::X, 10.0),
+    ("upperarm_l", Vec3::X, -70.0),
+    ("upperarm_l", Vec3::Y, -45.0),
+    ("lowerarm_r", Vec3::X, -90.0),
+];

@@ -1,0 +1,255 @@
+//! The skeleton tracker on synthetic Kinect frames of the MakeHuman body posed by the body
+//! crate's own forward kinematics and skinning (not the tracker's), against that rig's
+//! joints: poses it was not tuned on (arms out, a reach with a step, a turn with an arm
+//! across the body), at 2.2 and 2.9 m; and what must never break it: the person leaving and
+//! coming back, a second person behind, legs cut off by the image, garbage frames.
+
+mod common;
+
+use common::{ARMS_OUT, Body, REACH_AND_STEP, TURN_AND_CROSS, body, render, scene, scene_at};
+use fitroom_depth::synthetic::{Label, Scene};
+use fitroom_depth::{DepthCamera, DepthFrame, HEIGHT, WIDTH};
+use fitroom_sensor::KinectJoint;
+use fitroom_tracker::eval::TRUNK;
+use fitroom_tracker::{Confidence, TrackBody, Tracker, TrackerSettings};
+use glam::Vec3;
+
+fn tracker(body: &Body) -> Tracker {
+    let track = TrackBody::new(&body.model, &body.model.positions).expect("a trackable body");
+    Tracker::new(track, TrackerSettings::default())
+}
+
+/// Mean error over all joints and over the trunk, metres.
+fn errors(found: &[Vec3], truth: &[Vec3]) -> (f32, f32) {
+    let all = found
+        .iter()
+        .zip(truth)
+        .map(|(a, b)| a.distance(*b))
+        .sum::<f32>()
+        / 20.0;
+    let trunk = TRUNK
+        .iter()
+        .map(|j| found[j.index()].distance(truth[j.index()]))
+        .sum::<f32>()
+        / TRUNK.len() as f32;
+    (all, trunk)
+}
+
+#[test]
+fn follows_poses_it_was_not_tuned_on() {
+    let body = body();
+    for (name, turns, z, seed) in [
+        ("arms out", ARMS_OUT, 2.2f32, 11u64),
+        ("reach and step", REACH_AND_STEP, 2.9, 12),
+        ("turn and cross", TURN_AND_CROSS, 2.5, 13),
+    ] {
+        let mut tracker = tracker(&body);
+        let spot = Vec3::new(-0.1, -0.8, z);
+        // A second of motion from rest into the pose, then a moment held.
+        let frames = 30;
+        let mut last = (0.0, 0.0);
+        for i in 0..frames + 5 {
+            let share = (i as f32 / frames as f32).min(1.0);
+            let (skin, truth) = body.posed(&body.locals(turns, share), spot);
+            let frame = render(
+                &scene(vec![(skin, Label::Body)], &body.model.triangles),
+                seed + i as u64,
+                i as f64 / 30.0,
+            );
+            let tracked = tracker
+                .track(&frame)
+                .unwrap_or_else(|| panic!("{name}: frame {i} not tracked"));
+            let found: Vec<Vec3> = tracked.joints.iter().map(|j| j.position).collect();
+            assert!(found.iter().all(|p| p.is_finite()));
+            last = errors(&found, &truth);
+        }
+        let (all, trunk) = last;
+        println!(
+            "{name} at {z} m: mean joint error {:.0} mm, trunk {:.0} mm, starts {}",
+            all * 1000.0,
+            trunk * 1000.0,
+            tracker.starts
+        );
+        assert!(all < 0.06, "{name}: mean error {all:.3} m");
+        assert!(trunk < 0.04, "{name}: trunk error {trunk:.3} m");
+    }
+}
+
+#[test]
+fn leaves_and_comes_back_and_ignores_who_passes_behind() {
+    let body = body();
+    let mut tracker = tracker(&body);
+    let (skin, truth) = body.posed(&body.locals(ARMS_OUT, 0.5), Vec3::new(0.0, -0.8, 2.4));
+    // A second person behind, to the side, then stepping behind the first.
+    let (other, _) = body.posed(&body.locals(&[], 0.0), Vec3::ZERO);
+    let behind = |x: f32| other.iter().map(|p| *p + Vec3::new(x, -0.8, 3.4)).collect();
+    let mut t = 0.0;
+    let mut step = |tracker: &mut Tracker, scene: &Scene| {
+        t += 1.0 / 30.0;
+        tracker.track(&render(scene, (t * 300.0) as u64, t))
+    };
+    for x in [0.9f32, 0.7, 0.5, 0.3, 0.1] {
+        let scene = scene(
+            vec![(skin.clone(), Label::Body), (behind(x), Label::Other)],
+            &body.model.triangles,
+        );
+        let tracked = step(&mut tracker, &scene).expect("tracked with someone behind");
+        let hip = tracked.joints[KinectJoint::HipCenter.index()].position;
+        assert!(
+            hip.distance(truth[0]) < 0.08,
+            "second person at x {x}: hip centre {hip} vs {}",
+            truth[0]
+        );
+    }
+    // The room alone for a second: no one.
+    let empty = scene(vec![], &body.model.triangles);
+    for _ in 0..30 {
+        assert!(step(&mut tracker, &empty).is_none());
+    }
+    // Back: tracked again at once, from a fresh start.
+    let starts = tracker.starts;
+    let alone = scene(vec![(skin, Label::Body)], &body.model.triangles);
+    let back = step(&mut tracker, &alone).expect("re-acquired in the first frame back");
+    assert!(back.started && tracker.starts == starts + 1);
+    let found: Vec<Vec3> = back.joints.iter().map(|j| j.position).collect();
+    let (all, _) = errors(&found, &truth);
+    assert!(all < 0.08, "re-acquired with mean error {all:.3} m");
+}
+
+#[test]
+fn legs_cut_off_by_the_image_are_not_tracked() {
+    let body = body();
+    let mut tracker = tracker(&body);
+    // A sensor 1.2 m high, the person 1.8 m from it: the image ends at the shins.
+    let (skin, truth) = body.posed(&body.locals(ARMS_OUT, 0.3), Vec3::new(0.0, -1.2, 1.8));
+    let frame = render(
+        &scene_at(-1.2, vec![(skin, Label::Body)], &body.model.triangles),
+        5,
+        0.0,
+    );
+    let mut tracked = None;
+    for _ in 0..5 {
+        tracked = tracker.track(&frame);
+    }
+    let tracked = tracked.expect("the upper body is tracked");
+    let camera = DepthCamera::default();
+    for joint in KinectJoint::ALL {
+        let k = joint.index();
+        let in_image = camera.project(truth[k]).is_some_and(|p| {
+            (0.0..WIDTH as f32).contains(&p.x) && (0.0..HEIGHT as f32).contains(&p.y)
+        });
+        let got = tracked.joints[k].confidence;
+        if matches!(
+            joint,
+            KinectJoint::FootLeft
+                | KinectJoint::FootRight
+                | KinectJoint::AnkleLeft
+                | KinectJoint::AnkleRight
+        ) {
+            assert!(!in_image, "the test wants the feet out of view");
+            assert_eq!(got, Confidence::NotTracked, "{joint:?}");
+        }
+        if matches!(
+            joint,
+            KinectJoint::Head | KinectJoint::ShoulderCenter | KinectJoint::ShoulderLeft
+        ) {
+            assert_eq!(got, Confidence::Tracked, "{joint:?}");
+            let d = tracked.joints[k].position.distance(truth[k]);
+            assert!(d < 0.08, "{joint:?} {d:.3} m off");
+        }
+    }
+}
+
+#[test]
+fn garbage_frames_give_no_skeleton_and_no_nan() {
+    let body = body();
+    let mut tracker = tracker(&body);
+    let camera = DepthCamera::default();
+    // Start tracking someone, so the garbage arrives mid-track.
+    let (skin, _) = body.posed(&body.locals(ARMS_OUT, 0.2), Vec3::new(0.0, -0.8, 2.5));
+    let person = render(
+        &scene(vec![(skin, Label::Body)], &body.model.triangles),
+        3,
+        0.0,
+    );
+    assert!(tracker.track(&person).is_some());
+    let mut state = 0x2545_f491_u32;
+    let mut noise = || {
+        state ^= state << 13;
+        state ^= state >> 17;
+        state ^= state << 5;
+        (state % 2048) as u16
+    };
+    let frames = [
+        vec![0u16; WIDTH * HEIGHT],
+        vec![2047u16; WIDTH * HEIGHT],
+        (0..WIDTH * HEIGHT).map(|_| noise()).collect(),
+        // Holes: every other row of the person gone.
+        person
+            .raw
+            .as_deref()
+            .expect("the synthetic camera gives raw values")
+            .iter()
+            .enumerate()
+            .map(|(k, &r)| {
+                if (k / WIDTH).is_multiple_of(2) {
+                    2047
+                } else {
+                    r
+                }
+            })
+            .collect(),
+    ];
+    for (i, raw) in frames.into_iter().enumerate() {
+        let frame = DepthFrame::from_raw(raw, 0.1 * i as f64, i as u32, camera);
+        if let Some(tracked) = tracker.track(&frame) {
+            for j in &tracked.joints {
+                assert!(
+                    j.position.is_finite() && j.orientation.is_finite(),
+                    "frame {i}"
+                );
+            }
+            assert!(tracked.pose.is_finite());
+        }
+    }
+    // And it still tracks a good frame afterwards.
+    assert!(tracker.track(&person).is_some());
+}
+
+#[test]
+fn the_trackers_body_poses_as_the_body_crate_does() {
+    // Its own forward kinematics against the body crate's, for a pose with every tracked
+    // bone turned.
+    let body = body();
+    let track = TrackBody::new(&body.model, &body.model.positions).expect("a trackable body");
+    let spot = Vec3::new(0.2, -0.8, 2.7);
+    let turns: Vec<(&str, Vec3, f32)> = [
+        "spine_01",
+        "spine_03",
+        "neck_01",
+        "upperarm_l",
+        "lowerarm_l",
+        "hand_r",
+        "thigh_r",
+        "calf_l",
+        "foot_l",
+    ]
+    .iter()
+    .enumerate()
+    .map(|(i, name)| {
+        (
+            *name,
+            Vec3::new(1.0, i as f32 * 0.3, -0.5),
+            10.0 + 5.0 * i as f32,
+        )
+    })
+    .collect();
+    let local = body.locals(&turns, 1.0);
+    let (_, truth) = body.posed(&local, spot);
+    let mut pose = track.standing(spot, 1.0);
+    pose.local = local;
+    let joints = track.kinect_joints(&track.pose(&pose));
+    for (k, (a, b)) in joints.iter().zip(&truth).enumerate() {
+        assert!(a.distance(*b) < 1e-4, "joint {k}: {a} vs {b}");
+    }
+}
