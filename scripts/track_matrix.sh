@@ -5,7 +5,7 @@
 #
 #   scripts/track_matrix.sh OUT_DIR [FRAMES]
 #
-# Each recording is `fitroom sensor record --synthetic --treadmill --distance-m 2.5` (the clip
+# Each recording is `fitroom sensor record --synthetic --treadmill --distance-m $DISTANCE` (default 3) (the clip
 # replayed on the spot, so that a walk stays in the camera's view and range), FRAMES depth frames
 # (default 150, 5 s), written to OUT_DIR/<clip>_<body>_<garment>/ (the fakenect dump,
 # groundtruth.jsonl, body.json; record.json is the command's report). The noise seed differs per
@@ -55,6 +55,9 @@ if [[ $# -lt 1 || $# -gt 2 || $1 == -h || $1 == --help ]]; then
     exit 2
 fi
 FRAMES=${2:-150}
+# The person's distance from the sensor, metres (3 m: a 1.8 m person with raised arms stays
+# below the image's top edge with the sensor 0.8 m up; 2.5 m cuts heads and hands).
+DISTANCE=${DISTANCE:-3.0}
 [[ $FRAMES =~ ^[1-9][0-9]*$ ]] || die "FRAMES must be a positive whole number, not '$FRAMES'"
 mkdir -p -- "$1" || die "cannot create the output folder '$1'"
 OUT=$(cd -- "$1" && pwd)
@@ -144,6 +147,11 @@ human() {
     }'
 }
 
+# Depth frames (30 Hz) within a clip's length (INDEX.tsv: frames, frame time), at most FRAMES.
+clip_frames() {
+    awk -F'\t' -v clip="$1.bvh" -v most="$FRAMES" \
+        '$1 == clip { n = int($4 * $5 * 30) - 1; print (n < most ? n : most); exit }' "$INDEX"
+}
 total=$((${#SELECTED[@]} * ${#BODIES[@]} * ${#GARMENTS[@]}))
 done_count=0 skipped=0 made=0 spent=0
 failed=()
@@ -168,7 +176,7 @@ for clip in "${SELECTED[@]}"; do
 done
 # The whole matrix (every clip of the index, whatever CLIPS selects), per garment choice.
 per_garment=$((${#ALL_CLIPS[@]} * ${#BODIES[@]}))
-echo "$total recordings (${#SELECTED[@]} clips x ${#BODIES[@]} bodies x ${#GARMENTS[@]} garment choices), $FRAMES frames each, into $OUT: $todo to record, $((total - todo)) already there"
+echo "$total recordings (${#SELECTED[@]} clips x ${#BODIES[@]} bodies x ${#GARMENTS[@]} garment choices), at most $FRAMES frames each (the clip's length), into $OUT: $todo to record, $((total - todo)) already there"
 # Seconds the recordings still to come would take (with `all`: the whole matrix of every clip,
 # recorded from scratch): each garment
 # choice at its mean so far (the overall mean for one not timed yet).
@@ -206,8 +214,11 @@ for clip in "${SELECTED[@]}"; do
                 rm -rf -- "$dir"
             fi
             seed=$((1 + (row * ${#BODIES[@]} + bi) * ${#GARMENTS[@]} + gi))
+            # No more frames than the clip lasts: past its end the clip starts again, and the
+            # jump back to its first pose is no motion a person makes.
+            frames=$(clip_frames "$clip")
             args=(sensor record --synthetic --motion "data/mocap/cmu/$clip.bvh.gz" --treadmill
-                --shape "$OUT/bodies/$body.ron" --distance-m 2.5 --frames "$FRAMES"
+                --shape "$OUT/bodies/$body.ron" --distance-m "$DISTANCE" --frames "$frames"
                 --seed "$seed")
             if [[ $garment != none ]]; then
                 args+=(--garment "${GARMENT_FILE[$garment]}" --size "${SIZE[$body.$garment]}")
@@ -242,7 +253,7 @@ for clip in "${SELECTED[@]}"; do
             echo "$tag: ${took} s (seed $seed), $((todo - made - ${#failed[@]})) to go, about $(human "$(eta)") left"
             if [[ ${made_g[$garment]} -eq 1 ]]; then
                 # The first timed recording of this garment choice: the estimate for all of them.
-                echo "  one recording ($garment, $FRAMES frames) took ${took} s: $per_garment such recordings take about $(human "$(awk -v t="$took" -v n="$per_garment" 'BEGIN { print t * n }')"); the whole matrix of $((per_garment * ${#GARMENTS[@]})) (all clips), at the times measured so far, about $(human "$(eta all)")"
+                echo "  one recording ($garment, $frames frames) took ${took} s: $per_garment such recordings take about $(human "$(awk -v t="$took" -v n="$per_garment" 'BEGIN { print t * n }')"); the whole matrix of $((per_garment * ${#GARMENTS[@]})) (all clips), at the times measured so far, about $(human "$(eta all)")"
             fi
         done
     done

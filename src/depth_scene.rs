@@ -8,6 +8,7 @@ use fitroom_depth::synthetic::{Label, Scene, SceneMesh, SyntheticFrame};
 use fitroom_depth::truth::{FrameTruth, runs_of};
 use fitroom_garment::plugin::WornGarment;
 use fitroom_sensor::KinectJoint;
+use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
 use glam::Affine3A;
 
 /// The back wall's distance from the sensor, metres (inside the 4 m range, so the camera
@@ -52,6 +53,8 @@ pub fn room_with(placement: &SensorPlacement, body: &AvatarBody, extras: Extras)
             closed: true,
         });
     }
+    // The extras stand still too: the camera keeps them rendered with the room.
+    scene.still = scene.meshes.len();
     scene
 }
 
@@ -94,33 +97,6 @@ pub fn avatar_meshes(world: &mut World) -> Option<Vec<SceneMesh>> {
     Some(meshes)
 }
 
-/// The avatar bone whose head is at each Kinect joint (MakeHuman's `game_engine` rig; `_l`
-/// is the person's left, as the Kinect's `Left`), and for the head, how far above the bone's
-/// head (at the skull's base) the Kinect's head joint (the head's centre) sits, metres.
-const JOINT_BONES: [(KinectJoint, &str); 20] = [
-    (KinectJoint::HipCenter, "pelvis"),
-    (KinectJoint::Spine, "spine_02"),
-    (KinectJoint::ShoulderCenter, "neck_01"),
-    (KinectJoint::Head, "head"),
-    (KinectJoint::ShoulderLeft, "upperarm_l"),
-    (KinectJoint::ElbowLeft, "lowerarm_l"),
-    (KinectJoint::WristLeft, "hand_l"),
-    (KinectJoint::HandLeft, "middle_01_l"),
-    (KinectJoint::ShoulderRight, "upperarm_r"),
-    (KinectJoint::ElbowRight, "lowerarm_r"),
-    (KinectJoint::WristRight, "hand_r"),
-    (KinectJoint::HandRight, "middle_01_r"),
-    (KinectJoint::HipLeft, "thigh_l"),
-    (KinectJoint::KneeLeft, "calf_l"),
-    (KinectJoint::AnkleLeft, "foot_l"),
-    (KinectJoint::FootLeft, "ball_l"),
-    (KinectJoint::HipRight, "thigh_r"),
-    (KinectJoint::KneeRight, "calf_r"),
-    (KinectJoint::AnkleRight, "foot_r"),
-    (KinectJoint::FootRight, "ball_r"),
-];
-const HEAD_ABOVE_SKULL_BASE_M: f32 = 0.09;
-
 /// The avatar's 20 Kinect joints, sensor space, in [`KinectJoint::ALL`] order (`None`
 /// before its joints exist or when the rig lacks one).
 pub fn avatar_kinect_joints(world: &mut World) -> Option<Vec<Vec3>> {
@@ -151,18 +127,5 @@ pub fn frame_truth(index: usize, frame: &SyntheticFrame, joints: &[Vec3]) -> Fra
         joints: joints.iter().map(|p| p.to_array()).collect(),
         body_runs: runs_of(&frame.labels, Label::Body as u8),
         garment_runs: runs_of(&frame.labels, Label::Garment as u8),
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn the_joint_table_is_in_kinect_order() {
-        for (i, (joint, _)) in JOINT_BONES.iter().enumerate() {
-            assert_eq!(joint.index(), i);
-            assert_eq!(joint.name(), fitroom_depth::truth::JOINT_NAMES[i]);
-        }
     }
 }

@@ -11,6 +11,7 @@ pub mod depth_scene;
 pub mod design;
 pub mod headless;
 pub mod kiosk;
+pub mod performer;
 pub mod sensors;
 pub mod timing;
 
@@ -189,11 +190,13 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         )),
         None => Box::new(source),
     };
-    // A depth-only source has no skeleton until the tracker exists: the avatar holds still.
-    let (skeleton_source, sensor_name) = match &options.sensor {
-        sensors::SensorSpec::Bvh(_) => (Some(source), String::new()),
+    // A depth-only source (a recording, a Kinect) has no skeleton of its own: the tracker
+    // finds it in the depth (`SkeletonFromDepth` below).
+    let (skeleton_source, performer_clip, sensor_name) = match &options.sensor {
+        sensors::SensorSpec::Bvh(_) => (Some(source), None, String::new()),
         sensors::SensorSpec::Synthetic => (
             Some(source),
+            None,
             format!(
                 "synthetic (ground-truth skeleton of {}{})",
                 options.motion.display(),
@@ -204,18 +207,43 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
                 }
             ),
         ),
+        // The performer takes the clip: the camera films it, the avatar follows the tracker.
+        sensors::SensorSpec::Performer => (
+            None,
+            Some(source),
+            format!(
+                "performer (the synthetic Kinect filming {}; skeleton: the tracker)",
+                options.motion.display()
+            ),
+        ),
         other => (
             None,
-            format!("{} (depth only: no skeleton yet)", other.name()),
+            None,
+            format!("{} (skeleton: the tracker)", other.name()),
         ),
     };
-    let depth = sensors::ActiveDepth::open(
-        &options.sensor,
-        &placement,
-        options.depth_seed,
-        options.replay,
-        (&body, options.extras),
-    )?;
+    let depth = match performer_clip {
+        Some(clip) => Some(sensors::ActiveDepth::performer(
+            &placement,
+            options.depth_seed,
+            (&body, options.extras),
+            performer::Performer::new(
+                clip,
+                MotionPipeline::new(
+                    AvatarPipeline::new(&skeleton, floor_y)?,
+                    FilterSettings::default().filter.build(),
+                ),
+                body.clone(),
+            ),
+        )),
+        None => sensors::ActiveDepth::open(
+            &options.sensor,
+            &placement,
+            options.depth_seed,
+            options.replay,
+            (&body, options.extras),
+        )?,
+    };
     let mut app = App::new();
     // Garments, fabrics and size charts are assets of the garment folder (hot-reloaded):
     // registered before the `AssetPlugin` comes with the default plugins.
@@ -332,8 +360,14 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             ..Default::default()
         });
 
-    if let Some(source) = skeleton_source {
-        app.insert_resource(ActiveSensor(source));
+    match skeleton_source {
+        Some(source) => {
+            app.insert_resource(ActiveSensor(source));
+        }
+        // Depth alone (a recording, a Kinect): the tracker's skeletons drive the avatar.
+        None => {
+            app.insert_resource(fitroom_tracker::plugin::SkeletonFromDepth);
+        }
     }
     if let Some(depth) = depth {
         app.insert_resource(depth);

@@ -5,6 +5,9 @@
 //! - `synthetic`: the clip drives the avatar, and the synthetic Kinect v1 sees the avatar
 //!   and its garment in a room; the clip's skeleton is passed on, labelled ground truth,
 //!   until the tracker exists.
+//! - `performer`: the clip drives a performer the synthetic Kinect v1 films in a room
+//!   ([`crate::performer`]); the tracker finds the skeleton in that depth and drives the
+//!   avatar: the whole chain of a camera kiosk, without a camera.
 //! - `fakenect:DIR`: a fakenect recording played in pure Rust at its pace, looping; its
 //!   ground-truth skeleton drives the avatar when the recording has one.
 //! - `kinect`: a Kinect v1 through libfreenect (`LD_LIBRARY_PATH` naming Debian's fakenect
@@ -29,18 +32,20 @@ use fitroom_freenect::{KinectOptions, KinectSource, SourceStatus};
 use fitroom_sensor::plugin::SensorFeed;
 
 use crate::depth_scene;
+use crate::performer::Performer;
 
 /// A sensor, as `--sensor` and the kiosk configuration name it.
 #[derive(Clone, Debug, PartialEq)]
 pub enum SensorSpec {
     Bvh(PathBuf),
     Synthetic,
+    Performer,
     Fakenect(PathBuf),
     Kinect,
 }
 
 /// The forms a sensor is given in, for error messages.
-pub const SENSOR_FORMS: &str = "`bvh:FILE` (a recorded clip), `synthetic` (the synthetic Kinect v1 seeing the avatar), `fakenect:DIR` (a depth recording) or `kinect` (a Kinect v1 through libfreenect)";
+pub const SENSOR_FORMS: &str = "`bvh:FILE` (a recorded clip), `synthetic` (the synthetic Kinect v1 seeing the avatar), `performer` (the synthetic Kinect v1 filming the clip's performer, the tracker driving the avatar), `fakenect:DIR` (a depth recording) or `kinect` (a Kinect v1 through libfreenect)";
 
 impl FromStr for SensorSpec {
     type Err = anyhow::Error;
@@ -55,6 +60,7 @@ impl FromStr for SensorSpec {
         };
         Ok(match s {
             "synthetic" => Self::Synthetic,
+            "performer" => Self::Performer,
             "kinect" => Self::Kinect,
             _ if s.starts_with("bvh:") => Self::Bvh(non_empty(&s[4..], "clip")?),
             _ if s.starts_with("fakenect:") => Self::Fakenect(non_empty(&s[9..], "folder")?),
@@ -78,6 +84,7 @@ impl SensorSpec {
         match self {
             Self::Bvh(path) => format!("bvh:{}", path.display()),
             Self::Synthetic => "synthetic".into(),
+            Self::Performer => "performer".into(),
             Self::Fakenect(dir) => format!("fakenect:{}", dir.display()),
             Self::Kinect => "kinect".into(),
         }
@@ -112,12 +119,40 @@ pub enum ActiveDepth {
         room_meshes: usize,
         rendered: u64,
     },
+    /// Renders the performer after each new pose of its clip.
+    Performer {
+        camera: Box<SyntheticCamera>,
+        /// The room, then the performer (replaced each frame).
+        scene: Scene,
+        room_meshes: usize,
+        performer: Box<Performer>,
+    },
     /// A recording, with its ground truth when it has one.
     Recording(Box<Player>, Option<Vec<FrameTruth>>),
     Kinect(Box<KinectSource>),
 }
 
 impl ActiveDepth {
+    /// The synthetic camera filming `performer` in the room (with `extras`).
+    pub fn performer(
+        placement: &SensorPlacement,
+        seed: u64,
+        scene: (&AvatarBody, depth_scene::Extras),
+        performer: Performer,
+    ) -> Self {
+        let room = depth_scene::room_with(placement, scene.0, scene.1);
+        Self::Performer {
+            camera: Box::new(SyntheticCamera::new(
+                DepthCamera::default(),
+                NoiseSettings::default(),
+                seed,
+            )),
+            room_meshes: room.meshes.len(),
+            scene: room,
+            performer: Box::new(performer),
+        }
+    }
+
     /// The depth source of `spec` (`None` for a source without depth).
     pub fn open(
         spec: &SensorSpec,
@@ -128,7 +163,8 @@ impl ActiveDepth {
     ) -> Result<Option<Self>> {
         let camera = DepthCamera::default();
         Ok(match spec {
-            SensorSpec::Bvh(_) => None,
+            // The performer needs the clip and its pipeline: [`Self::performer`].
+            SensorSpec::Bvh(_) | SensorSpec::Performer => None,
             SensorSpec::Synthetic => {
                 let room = depth_scene::room_with(placement, scene.0, scene.1);
                 Some(Self::Synthetic {
@@ -206,6 +242,24 @@ fn poll_depth(
     };
     match depth.as_mut() {
         ActiveDepth::Synthetic { .. } => {}
+        ActiveDepth::Performer {
+            camera,
+            scene,
+            room_meshes,
+            performer,
+        } => match performer.advance(time.delta_secs_f64()) {
+            Ok(true) => {
+                if let Some(mesh) = performer.mesh() {
+                    scene.meshes.truncate(*room_meshes);
+                    scene.meshes.push(mesh);
+                    let frame = camera.render(scene, time.elapsed_secs_f64());
+                    feed.labels = Some(frame.labels.clone());
+                    feed.publish(frame.frame, None);
+                }
+            }
+            Ok(false) => {}
+            Err(error) => report(&mut feed, format!("the performer's clip: {error}")),
+        },
         ActiveDepth::Recording(player, truth) => match player.advance(time.delta_secs_f64()) {
             Ok(delivered) => {
                 if let Some((index, frame)) = delivered.frame {

@@ -14,6 +14,8 @@ use fitroom_depth::plugin::DepthFeed;
 use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SyntheticCamera};
 use fitroom_depth::truth::{FrameTruth, read_truth};
 use fitroom_depth::{DepthCamera, WIDTH};
+use fitroom_sensor::KinectJoint;
+use fitroom_sensor::plugin::SensorFeed;
 use glam::Vec3;
 
 struct Scratch(PathBuf);
@@ -176,6 +178,40 @@ fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
     let line = feed.truth.as_ref().expect("the recording's ground truth");
     assert_eq!(truth[line.frame].timestamp, latest.timestamp);
     assert_eq!(truth[line.frame], *line);
+    // Depth is its only sensor: the tracker's skeleton drives the motion pipeline, the hip
+    // centre tracked and where the ground truth has it (the dress hides the legs, not the
+    // hips).
+    let sensor = app.world().resource::<SensorFeed>();
+    let skeleton = sensor
+        .latest
+        .as_ref()
+        .expect("skeleton frames from the tracker");
+    let hip = skeleton.joint(KinectJoint::HipCenter);
+    assert_eq!(hip.confidence, 1.0);
+    let true_hip = Vec3::from_array(line.joints[KinectJoint::HipCenter.index()]);
+    assert!(
+        hip.position.distance(true_hip) < 0.12,
+        "hip centre {} vs {true_hip}",
+        hip.position
+    );
+
+    // The skeleton tracker's evaluation on it (`fitroom track eval`): every frame tracked.
+    let out = fitroom()
+        .args(["track", "eval", "--json", "--dump"])
+        .arg(&scratch.0)
+        .output()
+        .expect("fitroom runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
+    assert_eq!(report["overall"]["tracked_frames"].as_u64(), Some(12));
+    let trunk = report["overall"]["trunk_mean_mm"]
+        .as_f64()
+        .expect("a figure");
+    assert!(trunk < 100.0, "trunk joints {trunk} mm off");
 }
 
 /// Six frames of a box moving before a wall.
@@ -321,4 +357,42 @@ fn the_app_segments_the_person_the_synthetic_sensor_sees() {
         };
     }
     assert!(compared >= 20, "{compared} frames segmented and compared");
+}
+
+#[test]
+fn the_tracker_drives_the_avatar_from_the_performer_the_camera_films() {
+    // `--sensor performer`: the clip drives a performer, the synthetic camera films it, and
+    // the avatar's only skeleton is the tracker's.
+    let mut options =
+        AppOptions::with_defaults(Mode::Headless { render: false }).expect("defaults");
+    options.sensor = SensorSpec::Performer;
+    options.motion = fitroom_testdata::clip_path("141_16.bvh");
+    let mut app = headless::headless_app(&options).expect("the app builds");
+    for _ in 0..60 {
+        app.update();
+    }
+    let world = app.world();
+    let depth = world.resource::<DepthFeed>();
+    assert!(
+        depth.frames_received >= 20,
+        "{} depth frames",
+        depth.frames_received
+    );
+    let sensor = world.resource::<SensorFeed>();
+    assert!(
+        sensor.frames_received >= 20,
+        "{} skeletons",
+        sensor.frames_received
+    );
+    let skeleton = sensor.latest.as_ref().expect("a skeleton from the tracker");
+    // The performer waves 2.5 m away, standing: its hip centre tracked there.
+    let hip = skeleton.joint(KinectJoint::HipCenter);
+    assert_eq!(hip.confidence, 1.0);
+    assert!(
+        (2.0..3.0).contains(&hip.position.z) && hip.position.x.abs() < 0.3,
+        "hip centre at {}",
+        hip.position
+    );
+    let skeleton = world.resource::<fitroom_tracker::plugin::TrackedSkeleton>();
+    assert_eq!(skeleton.starts, 1, "tracked from one start, never lost");
 }

@@ -151,7 +151,7 @@ fn progress(frames: usize) -> indicatif::ProgressBar {
 
 /// The headless app with the synthetic sensor; every depth frame it renders is written with
 /// its ground truth.
-fn record_synthetic(args: &RecordArgs) -> Result<RecordReport> {
+pub(super) fn record_synthetic(args: &RecordArgs) -> Result<RecordReport> {
     let start = Instant::now();
     let mut options = super::app::options(Mode::Headless { render: false }, &args.inputs)?;
     options.sensor = SensorSpec::Synthetic;

@@ -1,6 +1,7 @@
-//! `fitroom track`: seeing the person in depth recordings. `extrema` measures the tracker's
-//! starting detector (segmentation, then geodesic extrema for head, hands and feet) against a
-//! recording's ground truth.
+//! `fitroom track`: seeing the person in depth recordings. `eval` measures the skeleton
+//! tracker against ground truth (recordings, or a clip rendered on the fly); `run` tracks any
+//! recording and prints every joint of every frame; `extrema` measures the tracker's starting
+//! detector (segmentation, then geodesic extrema for head, hands and feet).
 
 use std::path::{Path, PathBuf};
 
@@ -11,14 +12,56 @@ use fitroom_depth::fakenect::Recording;
 use fitroom_depth::truth::read_truth;
 use fitroom_math::stats::Summary;
 use fitroom_sensor::KinectJoint;
-use fitroom_tracker::{Part, SegmentSettings, Segmenter, geodesic_extrema};
+use fitroom_tracker::eval::{EvalReport, Evaluation};
+use fitroom_tracker::{
+    Part, SegmentSettings, Segmenter, TrackBody, Tracker, TrackerSettings, geodesic_extrema,
+};
 use glam::Vec3;
 use serde::Serialize;
 
-use super::OutputArgs;
+use super::app::Inputs;
+use super::sensor::{RecordArgs, record_synthetic};
+use super::{BodyArg, OutputArgs};
 
 #[derive(Subcommand)]
 pub enum TrackCommand {
+    /// The skeleton tracker against ground truth: per-joint mean and 95th-percentile 3D
+    /// error, the share of frames with every joint tracked or inferred, restarts, time per
+    /// frame. On recordings (`--dump`, repeat it: one report over all of them, and a line
+    /// each), or on a clip rendered by the synthetic camera on the fly (`--motion`, with
+    /// `--shape`, `--garment`, `--size`, `--seed`).
+    Eval {
+        /// A recording with ground truth (`fitroom sensor record --synthetic`).
+        #[arg(long, conflicts_with = "motion")]
+        dump: Vec<PathBuf>,
+        /// Frames to render on the fly.
+        #[arg(long, default_value_t = 150)]
+        frames: usize,
+        /// The avatar's distance from the sensor on the fly, metres.
+        #[arg(long, default_value_t = 2.5)]
+        distance_m: f32,
+        /// A picture (PNG) of four frames of the first recording, side by side and cut to
+        /// the person: depth, the person found, the ground-truth skeleton (magenta) and the
+        /// tracked one (green: tracked, yellow: inferred).
+        #[arg(long)]
+        png: Option<PathBuf>,
+        #[command(flatten)]
+        inputs: Box<Inputs>,
+        #[command(flatten)]
+        output: OutputArgs,
+    },
+    /// Tracks any recording (ground truth or not): per frame, each joint's position (sensor
+    /// space, metres), its pixel in the depth image and its confidence.
+    Run {
+        /// A fakenect recording.
+        #[arg(long)]
+        dump: PathBuf,
+        /// The body the tracker fits (default: the shipped MakeHuman body).
+        #[command(flatten)]
+        body: BodyArg,
+        #[command(flatten)]
+        output: OutputArgs,
+    },
     /// Head, hands and feet found as geodesic extrema in every frame of a synthetic
     /// recording, their joints estimated from the surface around each end, against the
     /// ground-truth joints: per part, the share of frames within 15 cm, the distance's mean
@@ -34,6 +77,43 @@ pub enum TrackCommand {
 
 pub fn run(command: TrackCommand) -> Result<()> {
     match command {
+        TrackCommand::Eval {
+            dump,
+            frames,
+            distance_m,
+            png,
+            inputs,
+            output,
+        } => {
+            let report = if dump.is_empty() {
+                eval_on_the_fly(*inputs, frames, distance_m, png.as_deref())?
+            } else {
+                eval(&dump, &inputs.body, png.as_deref())?
+            };
+            output.print(&report, print_eval)
+        }
+        TrackCommand::Run { dump, body, output } => {
+            let report = track_run(&dump, &body)?;
+            output.print_compact(&report, |r| {
+                for f in &r.frames {
+                    let tracked = f
+                        .joints
+                        .iter()
+                        .filter(|j| j.confidence == fitroom_tracker::Confidence::Tracked)
+                        .count();
+                    println!(
+                        "frame {:>4} {:>8.3} s: {}",
+                        f.frame,
+                        f.time_s,
+                        if f.joints.is_empty() {
+                            "no one".to_string()
+                        } else {
+                            format!("{tracked} of 20 joints tracked")
+                        }
+                    );
+                }
+            })
+        }
         TrackCommand::Extrema { dump, output } => {
             let report = extrema(&dump)?;
             output.print(&report, |r| {
@@ -134,5 +214,235 @@ fn extrema(dump: &Path) -> Result<ExtremaReport> {
         frames,
         segmented,
         parts,
+    })
+}
+
+/// `fitroom track eval`'s report: over all recordings, and each one's.
+#[derive(Debug, Serialize)]
+pub struct TrackEvalReport {
+    pub overall: EvalReport,
+    pub recordings: Vec<RecordingEval>,
+}
+
+/// One recording's headline figures.
+#[derive(Debug, Serialize)]
+pub struct RecordingEval {
+    pub dump: String,
+    pub frames: usize,
+    pub mean_mm: f64,
+    pub trunk_mean_mm: f64,
+    pub p95_mm: f64,
+    pub all_joints_pct: f64,
+    pub starts: usize,
+}
+
+fn print_eval(r: &TrackEvalReport) {
+    for d in &r.recordings {
+        println!(
+            "{}: {} frames, mean {:.0} mm (trunk {:.0}), p95 {:.0} mm, every joint tracked or \
+             inferred in {:.1} % of frames in view, {} starts",
+            d.dump, d.frames, d.mean_mm, d.trunk_mean_mm, d.p95_mm, d.all_joints_pct, d.starts
+        );
+    }
+    let o = &r.overall;
+    println!(
+        "overall: {} frames ({} tracked, {} wholly in view): mean {:.1} mm, trunk {:.1} mm, \
+         p95 {:.0} mm; every joint tracked or inferred in {:.1} %; {} starts; {:.2} ms per \
+         frame (p95 {:.2})",
+        o.frames,
+        o.tracked_frames,
+        o.in_view_frames,
+        o.mean_mm,
+        o.trunk_mean_mm,
+        o.p95_mm,
+        o.all_joints_pct,
+        o.starts,
+        o.time_mean_ms,
+        o.time_p95_ms
+    );
+    println!(
+        "  {:<16} {:>8} {:>8} {:>9} {:>9}",
+        "joint", "mean mm", "p95 mm", "tracked %", "inferred %"
+    );
+    for j in &o.joints {
+        println!(
+            "  {:<16} {:>8.0} {:>8.0} {:>9.1} {:>9.1}",
+            j.joint, j.mean_mm, j.p95_mm, j.tracked_pct, j.inferred_pct
+        );
+    }
+}
+
+/// The tracker for the body of `--body` (the shipped one by default).
+fn tracker(body: &BodyArg) -> Result<Tracker> {
+    let model = body.load()?;
+    let track = TrackBody::new(&model, &model.positions)
+        .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")?;
+    Ok(Tracker::new(track, TrackerSettings::default()))
+}
+
+/// Frames of a picture, as shares of the recording.
+const PICTURE_AT: [f64; 4] = [0.1, 0.35, 0.6, 0.85];
+
+fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEvalReport> {
+    let mut pictures: Vec<(Vec<u8>, Option<[u16; 4]>)> = Vec::new();
+    let mut tracker = tracker(body)?;
+    let camera = DepthCamera::default();
+    let mut overall = Evaluation::new();
+    let mut recordings = Vec::new();
+    for dump in dumps {
+        let recording = Recording::open(dump)?;
+        let Some(truth) = read_truth(dump)? else {
+            bail!(
+                "'{}' has no ground truth (groundtruth.jsonl): `fitroom track run` tracks it \
+                 without; record one with ground truth with `fitroom sensor record --synthetic`",
+                dump.display()
+            );
+        };
+        tracker.reset();
+        let starts = tracker.starts;
+        let mut one = Evaluation::new();
+        let count = recording.depth_count();
+        let shown: Vec<usize> = PICTURE_AT
+            .iter()
+            .map(|s| (s * count as f64) as usize)
+            .collect();
+        for (i, (entry, line)) in recording.depth_entries().zip(&truth).enumerate() {
+            let frame = recording
+                .read_depth(entry, camera)
+                .with_context(|| format!("{}: frame {}", dump.display(), line.frame))?;
+            let joints: Vec<Vec3> = line.joints.iter().map(|j| Vec3::from_array(*j)).collect();
+            // Time and score once; the overall figures take the same result.
+            let out = one.step(&mut tracker, &frame, &joints);
+            overall.record(&frame, &joints, out.as_ref(), one.last_time_ms());
+            if png.is_some() && recordings.is_empty() && shown.contains(&i) {
+                let rgb = fitroom_tracker::draw::picture(&frame, out.as_ref(), &joints);
+                pictures.push((rgb, out.as_ref().map(|t| t.person.bbox)));
+            }
+        }
+        let r = one.report(tracker.starts - starts);
+        recordings.push(RecordingEval {
+            dump: dump.display().to_string(),
+            frames: r.frames,
+            mean_mm: r.mean_mm,
+            trunk_mean_mm: r.trunk_mean_mm,
+            p95_mm: r.p95_mm,
+            all_joints_pct: r.all_joints_pct,
+            starts: r.starts,
+        });
+    }
+    if let Some(png) = png {
+        write_pictures(png, &pictures)?;
+    }
+    Ok(TrackEvalReport {
+        overall: overall.report(tracker.starts),
+        recordings,
+    })
+}
+
+/// Up to four 640x480 pictures side by side, each cut to the person (their box in the
+/// image, if found, and a margin; the same size for all), as a PNG.
+fn write_pictures(png: &Path, pictures: &[(Vec<u8>, Option<[u16; 4]>)]) -> Result<()> {
+    use fitroom_depth::{HEIGHT, WIDTH};
+    let (w, h) = (WIDTH as u32, HEIGHT as u32);
+    const MARGIN: u32 = 40;
+    // One tile size: the widest and tallest box with its margin.
+    let boxes: Vec<[u32; 4]> = pictures
+        .iter()
+        .map(|(_, b)| b.map_or([0, 0, w - 1, h - 1], |b| b.map(u32::from)))
+        .collect();
+    let tw = boxes
+        .iter()
+        .map(|b| b[2] - b[0] + 1 + 2 * MARGIN)
+        .max()
+        .unwrap_or(w)
+        .min(w);
+    let th = boxes
+        .iter()
+        .map(|b| b[3] - b[1] + 1 + 2 * MARGIN)
+        .max()
+        .unwrap_or(h)
+        .min(h);
+    let shown = pictures.len().min(4) as u32;
+    let mut strip = image::RgbImage::new(tw * shown.max(1), th);
+    for (n, ((rgb, _), b)) in pictures.iter().zip(&boxes).take(4).enumerate() {
+        let Some(full) = image::RgbImage::from_raw(w, h, rgb.clone()) else {
+            continue;
+        };
+        // The tile centred on the box, kept inside the image.
+        let cx = (b[0] + b[2]) / 2;
+        let cy = (b[1] + b[3]) / 2;
+        let x0 = cx.saturating_sub(tw / 2).min(w - tw);
+        let y0 = cy.saturating_sub(th / 2).min(h - th);
+        let tile = image::imageops::crop_imm(&full, x0, y0, tw, th).to_image();
+        image::imageops::replace(&mut strip, &tile, i64::from(n as u32 * tw), 0);
+    }
+    strip
+        .save(png)
+        .with_context(|| format!("cannot write the picture '{}'", png.display()))
+}
+
+/// Renders the clip with the synthetic camera into a scratch recording, then evaluates it.
+fn eval_on_the_fly(
+    inputs: Inputs,
+    frames: usize,
+    distance_m: f32,
+    png: Option<&Path>,
+) -> Result<TrackEvalReport> {
+    let out = std::env::temp_dir().join(format!("fitroom-track-eval-{}", std::process::id()));
+    if out.exists() {
+        std::fs::remove_dir_all(&out)
+            .with_context(|| format!("cannot clear the scratch folder '{}'", out.display()))?;
+    }
+    let body = inputs.body.clone();
+    let args = RecordArgs {
+        synthetic: true,
+        kinect: false,
+        distance_m,
+        frames,
+        out: out.clone(),
+        inputs,
+    };
+    let result = record_synthetic(&args).and_then(|_| eval(std::slice::from_ref(&out), &body, png));
+    // The scratch recording goes whatever happened.
+    let _ = std::fs::remove_dir_all(&out);
+    result
+}
+
+/// `fitroom track run`'s report.
+#[derive(Debug, Serialize)]
+pub struct RunReport {
+    pub dump: String,
+    pub frames: Vec<RunFrame>,
+}
+
+/// One frame: the joints in Kinect order (empty when no one was found).
+#[derive(Debug, Serialize)]
+pub struct RunFrame {
+    pub frame: usize,
+    pub time_s: f64,
+    pub joints: Vec<fitroom_tracker::TrackedJointOut>,
+}
+
+fn track_run(dump: &Path, body: &BodyArg) -> Result<RunReport> {
+    let mut tracker = tracker(body)?;
+    let recording = Recording::open(dump)?;
+    let mut frames = Vec::new();
+    for (i, entry) in recording.depth_entries().enumerate() {
+        let frame = recording
+            .read_depth(entry, DepthCamera::default())
+            .with_context(|| format!("{}: frame {i}", dump.display()))?;
+        let joints = tracker
+            .track(&frame)
+            .map(|t| t.joints.to_vec())
+            .unwrap_or_default();
+        frames.push(RunFrame {
+            frame: i,
+            time_s: frame.time_s,
+            joints,
+        });
+    }
+    Ok(RunReport {
+        dump: dump.display().to_string(),
+        frames,
     })
 }

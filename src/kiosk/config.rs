@@ -50,8 +50,9 @@ pub fn register_config_source(app: &mut App, config: &Path) {
 pub struct KioskConfig {
     /// Where frames come from: `bvh:FILE`, a recorded clip replayed as a Kinect v1 skeleton
     /// stream (FILE relative to `assets/`, or absolute); `synthetic`, the synthetic Kinect v1
-    /// seeing the avatar; `fakenect:DIR`, a depth recording; `kinect`, a Kinect v1 through
-    /// libfreenect.
+    /// seeing the avatar; `performer`, the synthetic Kinect v1 filming a performer the clip
+    /// drives (the tracker drives the avatar); `fakenect:DIR`, a depth recording; `kinect`, a
+    /// Kinect v1 through libfreenect.
     pub sensor: String,
     pub timings: TimingsConfig,
     /// The garments offered, in order; the first is worn by default.

@@ -1,6 +1,7 @@
 //! The picture-in-picture depth view: the newest depth frame, colour-mapped (near warm, far
 //! cool, black where the sensor has no reading), the person the segmentation found tinted
-//! pale, in the screen's bottom-right corner with its source and state. Shown or hidden with its button (and the P key); a depth source's
+//! pale and the skeleton the tracker fitted drawn on them (green: tracked, yellow: inferred),
+//! in the screen's bottom-right corner with its source and state. Shown or hidden with its button (and the P key); a depth source's
 //! error (a vanished Kinect, an unreadable frame) is written under the last good frame.
 
 use bevy::asset::RenderAssetUsages;
@@ -9,7 +10,10 @@ use bevy::render::render_resource::{Extent3d, TextureDimension, TextureFormat};
 use bevy_egui::{EguiContexts, EguiPrimaryContextPass, EguiTextureHandle, egui};
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_depth::{HEIGHT, WIDTH};
-use fitroom_tracker::plugin::UserMap;
+use fitroom_sensor::KinectJoint;
+use fitroom_tracker::TrackedJointOut;
+use fitroom_tracker::draw::{confidence_colour, draw_skeleton};
+use fitroom_tracker::plugin::{TrackedSkeleton, UserMap};
 
 /// Whether the view is shown, and its image: one Bevy image written in place per depth
 /// frame (an egui-managed texture set every frame is a new GPU texture every frame, never
@@ -58,6 +62,7 @@ fn depth_view(
     mut contexts: EguiContexts,
     feed: Option<Res<DepthFeed>>,
     user: Option<Res<UserMap>>,
+    skeleton: Option<Res<TrackedSkeleton>>,
     mut view: ResMut<DepthView>,
     mut images: ResMut<Assets<Image>>,
 ) -> Result {
@@ -69,11 +74,15 @@ fn depth_view(
         let view = &mut *view;
         fitroom_depth::colour::colourise(&frame.depth_mm, NEAR_MM, FAR_MM, &mut view.rgb);
         // The person the segmentation found, tinted white, when it is of this frame.
-        let mask = user
-            .as_ref()
-            .filter(|u| u.frame == feed.frames_received)
+        let current_user = user.as_ref().filter(|u| u.frame == feed.frames_received);
+        let mask = current_user
             .and_then(|u| u.person.as_ref())
             .map(|p| &p.mask);
+        // The skeleton is of the same frame as the map (one system makes both).
+        let joints = current_user
+            .and(skeleton.as_ref())
+            .and_then(|s| s.latest.as_ref())
+            .map(|t| t.joints);
         let current = view.image.as_ref().map(|(handle, _)| handle.clone());
         let exists = current.as_ref().is_some_and(|h| images.contains(h));
         match current {
@@ -82,12 +91,18 @@ fn depth_view(
                     // The image's own buffer, refilled: nothing allocated per frame.
                     let mut data = image.data.take().unwrap_or_default();
                     to_rgba(&view.rgb, mask, &mut data);
+                    if let Some(joints) = &joints {
+                        draw_tracked(joints, &mut data);
+                    }
                     image.data = Some(data);
                 }
             }
             _ => {
                 let mut rgba = Vec::new();
                 to_rgba(&view.rgb, mask, &mut rgba);
+                if let Some(joints) = &joints {
+                    draw_tracked(joints, &mut rgba);
+                }
                 let image = Image::new(
                     Extent3d {
                         width: WIDTH as u32,
@@ -129,7 +144,7 @@ fn depth_view(
                         ui.label(match &user.person {
                             Some(p) => format!(
                                 "person: {} px at {:.1} m ({:.1} ms)",
-                                p.pixels, p.centroid.z, user.segment_ms
+                                p.pixels, p.centroid.z, user.track_ms
                             ),
                             None => "nobody in view".into(),
                         });
@@ -167,4 +182,12 @@ fn to_rgba(rgb: &[u8], mask: Option<&Vec<bool>>, out: &mut Vec<u8>) {
         };
         out.extend_from_slice(&pixel);
     }
+}
+
+/// The tracked skeleton on the RGBA depth image (green: tracked, yellow: inferred).
+fn draw_tracked(joints: &[TrackedJointOut; KinectJoint::COUNT], rgba: &mut [u8]) {
+    let pixels: Vec<[f32; 2]> = joints.iter().map(|j| j.pixel).collect();
+    draw_skeleton(rgba, 4, &pixels, |k| {
+        confidence_colour(joints[k].confidence)
+    });
 }
