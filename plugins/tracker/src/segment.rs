@@ -105,6 +105,14 @@ const MAX_WIDTH_M: f32 = 2.0;
 /// A person is shallower than this (sensor z), metres.
 const MAX_DEPTH_M: f32 = 1.2;
 
+/// Bordering components are told apart in depth by at least this much, metres.
+const NEARER_M: f32 = 0.05;
+/// Something the image's top edge cuts off this high above the floor or higher is taller than
+/// a person (a wall), metres.
+const MAX_CUT_TOP_M: f32 = 2.0;
+/// Fewer bordered row sides than this say nothing of what is in front.
+const MIN_SIDES: u32 = 8;
+
 /// What is gathered per component.
 #[derive(Clone, Copy, Debug, Default)]
 struct Stats {
@@ -118,10 +126,15 @@ struct Stats {
     top_m: f32,
     bottom_m: f32,
     touches_bottom_row: bool,
+    touches_top_row: bool,
     /// Frontal area of the component's pixels, m² (each pixel covers (z/f)²).
     area_m2: f32,
     overlap: usize,
     bbox: [u16; 4],
+    /// Row sides where another component borders this one (directly or across pixels with
+    /// no reading, the projector's shadow), and those where that one is the nearer.
+    sides: u32,
+    behind: u32,
 }
 
 impl Stats {
@@ -144,6 +157,14 @@ impl Stats {
             && (self.bottom_m < 0.5 || self.touches_bottom_row)
             && extent.x < MAX_WIDTH_M
             && extent.z < MAX_DEPTH_M
+            && !self.mostly_behind()
+            && !(self.touches_top_row && self.top_m > MAX_CUT_TOP_M)
+    }
+
+    /// A person stands in front of what surrounds them; a surface seen between nearer ones
+    /// (a strip of the back wall beside a person standing close to the camera) is not one.
+    fn mostly_behind(&self) -> bool {
+        self.sides >= MIN_SIDES && self.behind * 2 > self.sides
     }
 }
 
@@ -309,6 +330,8 @@ impl Segmenter {
             ..Stats::new()
         }));
         for runs in components.runs.chunk_by(|a, b| a.row == b.row) {
+            let at = usize::from(runs[0].row) * WIDTH..(usize::from(runs[0].row) + 1) * WIDTH;
+            border(&frame.depth_mm[at.clone()], &depth[at], runs, stats);
             let mut kept = runs
                 .iter()
                 .filter(|r| !stats[r.component as usize].too_large);
@@ -341,6 +364,7 @@ impl Segmenter {
                 c.area_m2 += sa;
                 c.pixels += pixels.len();
                 c.touches_bottom_row |= j + 1 == HEIGHT;
+                c.touches_top_row |= j == 0;
                 c.bbox = [
                     c.bbox[0].min(run.start),
                     c.bbox[1].min(run.row),
@@ -373,6 +397,30 @@ impl Segmenter {
 }
 
 /// The sum of `values`, in eight interleaved partial sums (so that it vectorises).
+/// Counts, for the runs of one row, where two components border each other (next to each
+/// other, or with only pixels without a reading between them) and which is the nearer.
+fn border(raw_mm: &[u16], depth: &[f32], runs: &[components::Run], stats: &mut [Stats]) {
+    for pair in runs.windows(2) {
+        let (a, b) = (&pair[0], &pair[1]);
+        let (ca, cb) = (a.component as usize, b.component as usize);
+        if ca == cb
+            || raw_mm[usize::from(a.end)..usize::from(b.start)]
+                .iter()
+                .any(|&mm| mm > 0)
+        {
+            continue;
+        }
+        let (za, zb) = (depth[usize::from(a.end) - 1], depth[usize::from(b.start)]);
+        stats[ca].sides += 1;
+        stats[cb].sides += 1;
+        if za > zb + NEARER_M {
+            stats[ca].behind += 1;
+        } else if zb > za + NEARER_M {
+            stats[cb].behind += 1;
+        }
+    }
+}
+
 fn sum(values: &[f32]) -> f32 {
     let mut lanes = [0.0; 8];
     let chunks = values.chunks_exact(8);

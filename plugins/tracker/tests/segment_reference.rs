@@ -124,7 +124,8 @@ fn the_segmentation_is_the_flood_fills() {
 }
 
 /// The segmenter as it was before the scanline labelling (flood fill), verbatim but for its
-/// name.
+/// name, and with the rule since added (a component seen between nearer ones is no person)
+/// written pixel by pixel.
 #[derive(Default)]
 struct FloodFill {
     settings: SegmentSettings,
@@ -147,10 +148,15 @@ struct Stats {
     top_m: f32,
     bottom_m: f32,
     touches_bottom_row: bool,
+    touches_top_row: bool,
     /// Frontal area of the component's pixels, m² (each pixel covers (z/f)²).
     area_m2: f32,
     overlap: usize,
     bbox: [u16; 4],
+    /// Row sides where another component borders this one (next to it, or across pixels
+    /// without a reading), and those where the other one is nearer by more than 5 cm.
+    sides: u32,
+    behind: u32,
 }
 
 impl Stats {
@@ -172,6 +178,8 @@ impl Stats {
             && (self.bottom_m < 0.5 || self.touches_bottom_row)
             && extent.x < 2.0
             && extent.z < 1.2
+            && !(self.sides >= 8 && self.behind * 2 > self.sides)
+            && !(self.touches_top_row && self.top_m > 2.0)
     }
 }
 
@@ -244,6 +252,7 @@ impl FloodFill {
                 c.top_m = c.top_m.max(h);
                 c.bottom_m = c.bottom_m.min(h);
                 c.touches_bottom_row |= j + 1 == HEIGHT;
+                c.touches_top_row |= j == 0;
                 c.area_m2 += pixel_area(p.z);
                 c.bbox = [
                     c.bbox[0].min(i as u16),
@@ -276,6 +285,33 @@ impl FloodFill {
                 }
             }
             stats.push(c);
+        }
+        // Borders along each row: a change of component with nothing but pixels without a
+        // reading between.
+        for j in 0..HEIGHT {
+            let mut last: Option<(usize, f32)> = None;
+            for i in 0..WIDTH {
+                let k = j * WIDTH + i;
+                let c = self.component[k] as usize;
+                if c == 0 {
+                    if frame.depth_mm[k] > 0 {
+                        last = None;
+                    }
+                    continue;
+                }
+                if let Some((before, z)) = last
+                    && before != c
+                {
+                    stats[before].sides += 1;
+                    stats[c].sides += 1;
+                    if z > depth[k] + 0.05 {
+                        stats[before].behind += 1;
+                    } else if depth[k] > z + 0.05 {
+                        stats[c].behind += 1;
+                    }
+                }
+                last = Some((c, depth[k]));
+            }
         }
         let people: Vec<usize> = (1..stats.len())
             .filter(|&c| stats[c].looks_like_a_person(&s))

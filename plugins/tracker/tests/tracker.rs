@@ -116,6 +116,42 @@ fn leaves_and_comes_back_and_ignores_who_passes_behind() {
     assert!(all < 0.08, "re-acquired with mean error {all:.3} m");
 }
 
+/// A person stepping up to the camera hides most of the back wall: the strips of wall left at
+/// the image's sides stand on the floor and are person-sized, but a surface seen between nearer
+/// ones is nobody (the kiosk took such a strip for a person when the walk came too close).
+#[test]
+fn a_strip_of_wall_beside_a_person_too_close_is_nobody() {
+    let body = body();
+    let mut segmenter = fitroom_tracker::segment::Segmenter::default();
+    for (k, (z, wall)) in [1.4f32, 1.2, 1.0, 0.9, 0.8]
+        .into_iter()
+        .flat_map(|z| [(z, 3.0f32), (z, 3.6), (z, 3.9)])
+        .enumerate()
+    {
+        for x in [-0.3f32, 0.0, 0.3] {
+            let (skin, _) = body.posed(&body.locals(ARMS_OUT, 0.2), Vec3::new(x, -0.8, z));
+            // The image's top edge meets a wall 3.0, 3.6, 3.9 m away 2.0, 2.2, 2.3 m above
+            // the floor: strips of it are person-tall.
+            let mut room = Scene::room(-0.8, wall);
+            room.meshes.push(fitroom_depth::synthetic::SceneMesh {
+                positions: skin,
+                triangles: body.model.triangles.clone(),
+                label: Label::Body,
+                closed: true,
+            });
+            let frame = render(&room, k as u64, 0.0);
+            segmenter.reset();
+            if let Some(found) = segmenter.segment(&frame) {
+                assert!(
+                    found.centroid.z < z + 0.5,
+                    "person at x {x}, z {z}, wall at {wall}: found one at {}",
+                    found.centroid
+                );
+            }
+        }
+    }
+}
+
 #[test]
 fn legs_cut_off_by_the_image_are_not_tracked() {
     let body = body();
