@@ -57,6 +57,9 @@ pub struct KioskStatus {
     pub untracked_s: f32,
     /// Seconds spent in the current state.
     pub in_state_s: f32,
+    /// Whether the last sensor frame showed a person, and the seconds since it came.
+    pub person_in_last_frame: bool,
+    pub since_frame_s: f32,
 }
 
 /// Whether the raw and filtered sensor skeletons are drawn over the avatar (key D).
@@ -190,16 +193,23 @@ impl Plugin for KioskPlugin {
 
 fn track_person(time: Res<Time>, feed: Res<SensorFeed>, mut status: ResMut<KioskStatus>) {
     let dt = time.delta_secs();
-    let tracked = feed.new_frames.iter().any(|f| {
-        let hip = f.joint(KinectJoint::HipCenter);
-        hip.confidence > 0.5 && hip.position.is_finite()
-    });
-    if tracked {
+    // Frames come at 30 Hz and updates may be faster: between frames the last frame's word
+    // holds, for as long as a frame period and a half.
+    if !feed.new_frames.is_empty() {
+        status.person_in_last_frame = feed.new_frames.iter().any(|f| {
+            let hip = f.joint(KinectJoint::HipCenter);
+            hip.confidence > 0.5 && hip.position.is_finite()
+        });
+        status.since_frame_s = 0.0;
+    } else {
+        status.since_frame_s += dt;
+    }
+    if status.person_in_last_frame && status.since_frame_s < 0.05 {
         status.tracked_s += dt;
         status.untracked_s = 0.0;
     } else {
         status.untracked_s += dt;
-        // Frames come at 30 Hz and updates may be faster: only a real gap resets tracking.
+        // Only a real gap resets tracking.
         if status.untracked_s > 0.5 {
             status.tracked_s = 0.0;
         }
