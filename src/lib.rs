@@ -121,7 +121,7 @@ impl AppOptions {
             motion,
             depth_seed: 1,
             distance_m: BvhSourceOptions::default().start_distance_m,
-            treadmill: false,
+            treadmill: config.treadmill,
             replay: sensors::Replay::default(),
             extras: depth_scene::Extras::default(),
             image_size: UVec2::new(960, 720),

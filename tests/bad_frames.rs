@@ -3,7 +3,7 @@
 
 mod common;
 
-use fitroom::{AppOptions, Mode, headless};
+use fitroom::{Mode, headless};
 use fitroom_body::plugin::AvatarJoint;
 use fitroom_motion::plugin::AvatarMotion;
 use fitroom_sensor::{
@@ -43,7 +43,7 @@ impl SensorSource for SpoiledSource {
 
 #[test]
 fn bad_frames_never_reach_the_avatar() {
-    let options = AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets");
+    let options = common::clip_options(Mode::Headless { render: false });
     let mut app = headless::headless_app(&options).expect("app builds");
     let inner = BvhSource::load(&options.motion, Default::default()).expect("clip");
     app.insert_resource(ActiveSensor(Box::new(SpoiledSource { inner, emitted: 0 })));

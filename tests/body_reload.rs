@@ -4,11 +4,13 @@
 //! was and say why, naming the file. The whole app, headless, on a scratch copy of the
 //! shipped body.
 
+mod common;
+
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use bevy::app::App;
-use fitroom::{AppOptions, Mode, headless};
+use fitroom::{Mode, headless};
 use fitroom_body::BodyModel;
 use fitroom_body::plugin::AvatarBody;
 use fitroom_body::reload::BodyFile;
@@ -58,8 +60,7 @@ fn a_rewritten_body_file_reshapes_the_avatar_and_a_bad_one_is_kept_out() {
     let _ = std::fs::remove_dir_all(&scratch.0);
     std::fs::create_dir_all(&scratch.0).expect("scratch folder");
     let file = scratch.0.join("body.fitbody");
-    let mut options =
-        AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets exist");
+    let mut options = common::clip_options(Mode::Headless { render: false });
     std::fs::copy(&options.body, &file).expect("copy the shipped body");
     options.body = file.clone();
     let model = BodyModel::read(&file).expect("the shipped body reads");

@@ -4,11 +4,13 @@
 //! file, line and field while the garment worn stays on and keeps being simulated; fixed files
 //! are worn again.
 
+mod common;
+
 use std::path::PathBuf;
 use std::time::{Duration, Instant};
 
 use bevy::asset::Assets;
-use fitroom::{AppOptions, Mode, headless};
+use fitroom::{Mode, headless};
 use fitroom_garment::asset::GarmentAsset;
 use fitroom_garment::plugin::{GarmentStatus, WornGarment};
 
@@ -94,8 +96,7 @@ fn line_of(text: &str, needle: &str) -> usize {
 #[test]
 fn edits_reload_through_the_asset_server_and_malformed_ones_keep_the_garment() {
     let scratch = Scratch::new();
-    let mut options =
-        AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets exist");
+    let mut options = common::clip_options(Mode::Headless { render: false });
     options.garment = Some(scratch.garment());
     let mut app = headless::headless_app(&options).expect("app builds");
     run_until(&mut app, "the skirt is worn and stepped", |app| {

@@ -36,16 +36,21 @@ fn raw_root_path(text: &str, t0: f64, t1: f64) -> (f64, f64) {
     (length, frame_time)
 }
 
-#[test]
-fn avatar_root_travels_the_clips_path() {
-    let options =
-        AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets exist");
-    let report = headless::run(&options, 120, None).expect("headless run works");
-
-    // 120 frames of 1/60 s = 2 s of the clip, emitted at 30 Hz.
+/// The avatar's root path over a headless run of `frames` updates (1/60 s each) against the
+/// clip's own root path over the same time, from the file; returns the report.
+fn assert_root_path(
+    options: &AppOptions,
+    frames: u32,
+    min_path_m: f64,
+) -> headless::HeadlessReport {
+    let report = headless::run(options, frames, None).expect("headless run works");
+    let seconds = f64::from(frames) / 60.0;
+    // The sensor's frames come at 30 Hz (the tracker's: one per depth frame it found the
+    // person in, the first one a frame late at most).
+    let expected_frames = (seconds * 30.0).round() as u64;
     assert!(
-        (59..=61).contains(&report.sensor_frames),
-        "sensor frames in 2 s: {}",
+        (expected_frames - 2..=expected_frames + 1).contains(&report.sensor_frames),
+        "sensor frames in {seconds} s: {}",
         report.sensor_frames
     );
     let scale = report
@@ -65,17 +70,25 @@ fn avatar_root_travels_the_clips_path() {
     let got = f64::from(report.root_path_m);
     let error = (got - expected_m).abs() / expected_m;
     println!(
-        "root path: avatar {got:.3} m, clip {expected_m:.3} m (scale {scale:.3}), error {:.2}%",
+        "{}: root path: avatar {got:.3} m, clip {expected_m:.3} m (scale {scale:.3}), error {:.2}%",
+        report.sensor_source,
         error * 100.0
     );
     assert!(
-        expected_m > 1.0,
-        "the walk clip should cover more than 1 m in 2 s: {expected_m}"
+        expected_m > min_path_m,
+        "the walk clip should cover more than {min_path_m} m in {seconds} s: {expected_m}"
     );
     assert!(
         error < 0.05,
         "avatar path {got:.3} m vs clip {expected_m:.3} m"
     );
+    report
+}
+
+#[test]
+fn avatar_root_travels_the_clips_path() {
+    let options = common::clip_options(Mode::Headless { render: false });
+    let report = assert_root_path(&options, 120, 1.0);
 
     // Every joint is reported, by name, and finite.
     assert!(report.joints.len() >= 55, "joints: {}", report.joints.len());
@@ -96,6 +109,131 @@ fn avatar_root_travels_the_clips_path() {
     }
 }
 
+/// The walking skeleton's root-path check on the whole real chain: the synthetic Kinect films
+/// the clip's performer, our tracker finds the skeleton in the depth, and the motion pipeline
+/// drives the avatar from it. The walk comes towards the camera as recorded (no treadmill),
+/// from 3.7 m (the camera reads to 4 m) for 1.2 s, i.e. to about 2.1 m, where the head leaves
+/// the image's top edge.
+#[test]
+fn avatar_root_travels_the_clips_path_through_depth_and_the_tracker() {
+    let mut options = AppOptions::with_defaults(Mode::Headless { render: false })
+        .expect("the shipped assets read");
+    assert_eq!(options.sensor, fitroom::sensors::SensorSpec::Performer);
+    options.treadmill = false;
+    options.distance_m = 3.3;
+    let report = assert_root_path(&options, 72, 1.0);
+    assert!(
+        report.sensor_source.starts_with("performer"),
+        "{}",
+        report.sensor_source
+    );
+    assert_eq!(
+        report.rejected_frames, 0,
+        "the gate kept no tracked frame out"
+    );
+}
+
+/// The kiosk with the shipped default (the performer on a treadmill): a person is found,
+/// calibrated and tried on, and the avatar walks on the spot where the performer is.
+#[test]
+fn the_shipped_default_tracks_the_performer_into_try_on() {
+    let options = AppOptions::with_defaults(Mode::Headless { render: false })
+        .expect("the shipped assets read");
+    assert!(options.treadmill);
+    let mut app = headless::headless_app(&options).expect("the app builds");
+    let mut states = Vec::new();
+    for _ in 0..200 {
+        app.update();
+        let state = *app
+            .world()
+            .resource::<bevy::prelude::State<fitroom::kiosk::KioskState>>()
+            .get();
+        if states.last() != Some(&state) {
+            states.push(state);
+        }
+    }
+    use fitroom::kiosk::KioskState::*;
+    assert_eq!(
+        states,
+        [Attract, Calibrate, TryOn],
+        "the kiosk's states in 3.3 s"
+    );
+    let tracked = app
+        .world()
+        .resource::<fitroom_tracker::plugin::TrackedSkeleton>();
+    assert_eq!(tracked.starts, 1, "tracked from one start");
+}
+
+/// The person walks towards the camera and past it (no treadmill), out of its view: the kiosk
+/// goes back to Attract; the clip starts again from 3.7 m and the tracker finds the person by
+/// itself, the kiosk calibrates them again.
+#[test]
+fn the_kiosk_returns_to_attract_when_the_person_leaves_and_tracks_them_again() {
+    use fitroom::kiosk::KioskState::{self, *};
+    // The person is out of view about 1 s of each pass: Attract after half a second.
+    let scratch = std::env::temp_dir().join(format!("fitroom-leave-{}", std::process::id()));
+    std::fs::create_dir_all(&scratch).expect("scratch folder");
+    let config = scratch.join("kiosk.ron");
+    let shipped = fitroom::assets::assets_dir()
+        .expect("assets")
+        .join("kiosk.ron");
+    let text = std::fs::read_to_string(shipped).expect("the shipped configuration");
+    let edited = text.replacen("lost_s: 3.0", "lost_s: 0.5", 1);
+    assert_ne!(edited, text);
+    std::fs::write(&config, edited).expect("write");
+    let mut options =
+        AppOptions::with_config(Mode::Headless { render: false }, &config).expect("it reads");
+    options.treadmill = false;
+    options.distance_m = 3.3;
+    let mut app = headless::headless_app(&options).expect("the app builds");
+    // (state, the update it began at)
+    let mut states: Vec<(KioskState, u32)> = Vec::new();
+    // The walk lasts 4.04 s and loops: two passes and the start of a third.
+    for update in 0..560 {
+        app.update();
+        let state = *app
+            .world()
+            .resource::<bevy::prelude::State<KioskState>>()
+            .get();
+        if states.last().map(|s| s.0) != Some(state) {
+            states.push((state, update));
+        }
+    }
+    println!("states (state, update at 60 Hz): {states:?}");
+    let sequence: Vec<KioskState> = states.iter().map(|s| s.0).collect();
+    let back = sequence
+        .windows(2)
+        .position(|w| w[0] != Attract && w[1] == Attract)
+        .expect("back to Attract when the person left");
+    assert!(
+        sequence[back + 1..].contains(&Calibrate),
+        "the person found again after leaving: {sequence:?}"
+    );
+    // Each time the clip starts again the person stands 3.3 m away, wholly in view: found
+    // within a second.
+    let source = fitroom_sensor::bvh_source::BvhSource::load(&options.motion, Default::default())
+        .expect("clip parses");
+    let period_updates = source.played_frame_count() as f64 / source.clip_fps() * 60.0;
+    for pair in states.windows(2) {
+        if let [(Attract, _), (Calibrate, found)] = pair {
+            let loop_start = (f64::from(*found) / period_updates).round() * period_updates;
+            let late = f64::from(*found) - loop_start;
+            assert!(
+                late <= 60.0,
+                "found {late:.0} updates after coming back into view (loop at {loop_start:.0})"
+            );
+        }
+    }
+    let tracked = app
+        .world()
+        .resource::<fitroom_tracker::plugin::TrackedSkeleton>();
+    assert!(
+        tracked.starts >= 2,
+        "tracking restarted: {} starts",
+        tracked.starts
+    );
+}
+
 /// The avatar shaped from a shape file at start, then reshaped live (what the body panel's
 /// sliders do): the body, its measurements, the joints and the motion skeleton all follow.
 #[test]
@@ -112,8 +250,7 @@ fn the_avatar_takes_a_shape_and_reshapes_live() {
         height: 0.8,
         ..Shape::default()
     };
-    let mut options =
-        AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets exist");
+    let mut options = common::clip_options(Mode::Headless { render: false });
     options.shape = Some(tall.clone());
     let mut app = fitroom::build_app(&options).expect("app");
     for _ in 0..10 {

@@ -6,7 +6,7 @@
 
 mod common;
 
-use fitroom::{AppOptions, Mode, headless};
+use fitroom::{Mode, headless};
 use fitroom_body::plugin::HiddenSkin;
 use fitroom_garment::plugin::ClothSettings;
 
@@ -33,7 +33,7 @@ fn is_room(p: &image::Rgba<u8>) -> bool {
 /// The image after 150 frames of the dress on the walk, with the covered skin hidden or not,
 /// and the number of body vertices hidden.
 fn dress_after_150_frames(hide: bool) -> (image::RgbaImage, usize) {
-    let mut options = AppOptions::with_defaults(Mode::Headless { render: true }).expect("assets");
+    let mut options = common::clip_options(Mode::Headless { render: true });
     let assets = fitroom::assets::assets_dir().expect("assets");
     options.garment = Some(assets.join("garments/sundress.ron"));
     let mut app = headless::headless_app(&options).expect("app builds");

@@ -2,14 +2,15 @@
 //! path (the asset server and `GarmentSource`) serves the command line and the kiosk. The whole
 //! app, headless without a renderer.
 
+mod common;
+
 use std::time::{Duration, Instant};
 
-use fitroom::{AppOptions, Mode, headless};
+use fitroom::{Mode, headless};
 use fitroom_garment::plugin::GarmentStatus;
 
 fn wears(file: &str) {
-    let mut options =
-        AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets exist");
+    let mut options = common::clip_options(Mode::Headless { render: false });
     options.garment = Some(
         fitroom::assets::assets_dir()
             .expect("assets")

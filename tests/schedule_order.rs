@@ -3,6 +3,8 @@
 //! systems with conflicting access and no ordering between them; these tests fail on any pair
 //! in which both systems are ours (Bevy's own internal pairs are Bevy's business).
 
+mod common;
+
 use std::collections::HashMap;
 
 use bevy::ecs::schedule::{Schedules, SystemKey};
@@ -69,8 +71,7 @@ fn assert_unambiguous(options: &AppOptions) {
 /// stage timing.
 #[test]
 fn our_systems_run_in_a_said_order() {
-    let mut options =
-        AppOptions::with_defaults(Mode::Headless { render: false }).expect("assets exist");
+    let mut options = common::clip_options(Mode::Headless { render: false });
     options.garment = Some(
         fitroom::assets::assets_dir()
             .expect("assets")

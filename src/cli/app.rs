@@ -22,8 +22,10 @@ pub struct Inputs {
     #[command(flatten)]
     pub body: BodyArg,
     /// Where frames come from: `bvh:FILE` (a recorded clip), `synthetic` (the synthetic
-    /// Kinect v1 seeing the avatar, which the clip drives), `fakenect:DIR` (a depth
-    /// recording), `kinect` (a Kinect v1 through libfreenect). Default: the configuration's.
+    /// Kinect v1 seeing the avatar, which the clip drives), `performer` (the synthetic
+    /// Kinect v1 filming the clip's performer, our tracker driving the avatar), `fakenect:DIR`
+    /// (a depth recording), `kinect` (a Kinect v1 through libfreenect). Default: the
+    /// configuration's (`performer`).
     #[arg(long)]
     pub sensor: Option<String>,
     /// With the synthetic sensor: a box (0.5 x 1 x 0.5 m) standing at sensor-space X,Z metres
@@ -44,9 +46,12 @@ pub struct Inputs {
     pub motion: Option<PathBuf>,
     /// Replay the clip on a treadmill: the performer's hip centre stays where it is at the
     /// clip's first frame (horizontally; the feet slide), so a walk stays in the sensor's
-    /// view and range.
-    #[arg(long)]
+    /// view and range. Default: the configuration's `treadmill`.
+    #[arg(long, conflicts_with = "no_treadmill")]
     pub treadmill: bool,
+    /// Replay the clip as recorded (the performer travels), whatever the configuration says.
+    #[arg(long)]
+    pub no_treadmill: bool,
     /// `kinect`: replay the clip through the Kinect v1 noise model (to see the filters work);
     /// `none`: the clean recording.
     #[arg(long, value_enum, default_value_t = Noise::None)]
@@ -205,7 +210,7 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
         motion,
         depth_seed: inputs.seed,
         distance_m: defaults.distance_m,
-        treadmill: inputs.treadmill,
+        treadmill: (inputs.treadmill || defaults.treadmill) && !inputs.no_treadmill,
         extras: crate::depth_scene::Extras {
             box_at: inputs.synthetic_box,
             person_at: inputs.synthetic_person,

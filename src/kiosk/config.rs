@@ -54,6 +54,12 @@ pub struct KioskConfig {
     /// drives (the tracker drives the avatar); `fakenect:DIR`, a depth recording; `kinect`, a
     /// Kinect v1 through libfreenect.
     pub sensor: String,
+    /// With a clip-driven sensor (`bvh:`, `synthetic`, `performer`): replay the clip on a
+    /// treadmill, the performer's hip centre kept where it is at the clip's first frame, so a
+    /// walk stays in the camera's view and range (the embedded walk otherwise walks past the
+    /// camera in 2 s). Read at start.
+    #[serde(default)]
+    pub treadmill: bool,
     pub timings: TimingsConfig,
     /// The garments offered, in order; the first is worn by default.
     pub garments: Vec<GarmentEntry>,
@@ -300,7 +306,14 @@ mod tests {
     #[test]
     fn the_shipped_configuration_reads() {
         let config = KioskConfig::from_ron_str(SHIPPED, "kiosk.ron").expect("valid");
-        assert_eq!(config.sensor_clip(), Some("motions/walk.bvh"));
+        // The embedded default is the whole real chain: the synthetic camera films the
+        // embedded clip's performer on a treadmill, the tracker drives the avatar.
+        assert_eq!(
+            config.sensor_spec().expect("a sensor"),
+            crate::sensors::SensorSpec::Performer
+        );
+        assert_eq!(config.sensor_clip(), None);
+        assert!(config.treadmill);
         assert!(config.garments.len() >= 3);
         assert!(config.timings.calibrate_s > 0.0);
     }
@@ -331,7 +344,7 @@ mod tests {
             "{message}"
         );
 
-        let bad = SHIPPED.replacen("bvh:motions/walk.bvh", "webcam", 1);
+        let bad = SHIPPED.replacen("\"performer\"", "\"webcam\"", 1);
         let message = KioskConfig::from_ron_str(&bad, "kiosk.ron")
             .expect_err("unknown sensor")
             .to_string();

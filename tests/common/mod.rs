@@ -3,6 +3,8 @@
 
 use std::path::PathBuf;
 
+use fitroom::{AppOptions, Mode, sensors::SensorSpec};
+
 /// Every clip listed in the committed `INDEX.tsv`: (clip name, frame count).
 pub fn cmu_index() -> Vec<(String, usize)> {
     fitroom_testdata::cmu_index()
@@ -16,4 +18,15 @@ pub fn out_dir() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("fitroom-tests");
     std::fs::create_dir_all(&dir).expect("can create the test output folder");
     dir
+}
+
+/// The app's defaults with the embedded clip's own skeleton as the sensor (`bvh:`, replayed as
+/// recorded): for the tests of what lies downstream of the sensor (motion, garments, rendering,
+/// reloads), which should not depend on the tracker. The shipped default films the clip's
+/// performer on a treadmill and tracks it (`tests/headless_ecs.rs` runs that chain).
+pub fn clip_options(mode: Mode) -> AppOptions {
+    let mut options = AppOptions::with_defaults(mode).expect("the shipped assets read");
+    options.sensor = SensorSpec::Bvh(options.motion.clone());
+    options.treadmill = false;
+    options
 }
