@@ -14,7 +14,7 @@ use fitroom_math::stats::Summary;
 use fitroom_sensor::KinectJoint;
 use fitroom_tracker::eval::{EvalReport, Evaluation};
 use fitroom_tracker::{
-    Part, SegmentSettings, Segmenter, TrackBody, Tracker, TrackerSettings, geodesic_extrema,
+    Part, SegmentSettings, Segmenter, Tracker, TrackerSettings, geodesic_extrema,
 };
 use glam::Vec3;
 use serde::Serialize;
@@ -272,12 +272,13 @@ fn print_eval(r: &TrackEvalReport) {
     }
 }
 
-/// The tracker for the body of `--body` (the shipped one by default).
+/// The tracker for the body of `--body` (the shipped one by default), estimating each
+/// person's build as it tracks them (in the frame that completes its snapshots: the same
+/// recording gives the same figures).
 fn tracker(body: &BodyArg) -> Result<Tracker> {
     let model = body.load()?;
-    let track = TrackBody::new(&model, &model.positions)
-        .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")?;
-    Ok(Tracker::new(track, TrackerSettings::default()))
+    Tracker::estimating(std::sync::Arc::new(model), TrackerSettings::default())
+        .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")
 }
 
 /// Frames of a picture, as shares of the recording.

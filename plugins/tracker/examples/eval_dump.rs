@@ -6,7 +6,8 @@
 //! * `PPM_FRAME=N`: frame N as a picture (`/tmp/frame.ppm`: depth, the person, the true and
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
-//!   them costs); `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`: override the settings.
+//!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
+//!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`: override the settings.
 //!
 //! CPU time per frame (this thread's, from `/proc/thread-self/schedstat`: this host's wall
 //! time is noisier) goes to stderr.
@@ -50,6 +51,7 @@ fn settings() -> TrackerSettings {
         s.fit.outlier_m = v;
     }
     s.scale = env("SCALE");
+    s.recover = std::env::var("NO_RECOVER").is_err();
     s
 }
 
@@ -64,7 +66,13 @@ fn main() -> Result<(), Error> {
         }
         Err(_) => model.positions.clone(),
     };
-    let mut tracker = Tracker::new(TrackBody::new(&model, &positions)?, settings());
+    // A given shape is kept; else the person's build is estimated while tracking, unless
+    // FIXED is set (the default body throughout).
+    let mut tracker = if std::env::var("SHAPE").is_ok() || std::env::var("FIXED").is_ok() {
+        Tracker::new(TrackBody::new(&model, &positions)?, settings())
+    } else {
+        Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?
+    };
     let recording = Recording::open(&dir)?;
     let truth = read_truth(&dir)?.ok_or("the recording has no ground truth")?;
     let picture_at: Option<usize> = std::env::var("PPM_FRAME").ok().and_then(|v| v.parse().ok());
@@ -112,6 +120,19 @@ fn main() -> Result<(), Error> {
         cpu_ms.get(cpu_ms.len() * 95 / 100),
     ) {
         eprintln!("cpu ms per frame: median {median:.2}, p95 {p95:.2}");
+    }
+    if let Some(e) = &tracker.shape {
+        eprintln!(
+            "build: gender {:.2} weight {:.2} muscle {:.2} height {:.2} proportions {:.2} (cost {:.2} mm, default {:.2} mm, {} bodies tried)",
+            e.shape.gender,
+            e.shape.weight,
+            e.shape.muscle,
+            e.shape.height,
+            e.shape.proportions,
+            e.cost_m * 1000.0,
+            e.default_cost_m * 1000.0,
+            e.evaluations
+        );
     }
     if std::env::var("SIGNED").is_ok() {
         for (k, (sum, n)) in signed.iter().enumerate() {

@@ -75,6 +75,9 @@ pub struct FitStats {
     pub inliers: f32,
     /// Mean absolute data residual of the non-outliers, metres.
     pub mean_residual_m: f32,
+    /// Share of the data points farther than [`FitSettings::outlier_m`] from the model: what
+    /// the fit leaves unexplained.
+    pub outliers: f32,
     /// Share of the capsules' front samples in the image that fall where the camera sees
     /// past the person.
     pub outside: f32,
@@ -238,7 +241,7 @@ impl Fitter {
             self.matches.clear();
         }
         // Data to model.
-        let (mut inliers, mut used, mut sum) = (0usize, 0usize, 0.0f32);
+        let (mut inliers, mut used, mut sum, mut outliers) = (0usize, 0usize, 0.0f32, 0usize);
         let first = self.candidates.len() != obs.points.len();
         if first {
             self.candidates.clear();
@@ -299,6 +302,7 @@ impl Fitter {
                 self.support[k] += 1;
             }
             if far > settings.outlier_m {
+                outliers += 1;
                 continue;
             }
             used += 1;
@@ -335,6 +339,7 @@ impl Fitter {
         self.spread_gathered(body, layout, &posed, pivot);
         stats.inliers = inliers as f32 / obs.points.len().max(1) as f32;
         stats.mean_residual_m = sum / used.max(1) as f32;
+        stats.outliers = outliers as f32 / obs.points.len().max(1) as f32;
         // Model to data: the front of each capsule, along its axis.
         let camera = obs.frame.camera;
         let (mut seen, mut outside) = (0usize, 0usize);

@@ -4,8 +4,9 @@
 //! skeleton also joins the [`SensorFeed`] as a Kinect v1 frame, so the motion pipeline
 //! (gate, filter, retarget, limits, foot skate) runs on it as on a BVH clip's.
 //!
-//! The tracker fits the unshaped body of [`AvatarBody`] (the person is not the avatar's
-//! shape: it sizes the body to them as it tracks); it is made when that body first exists.
+//! The tracker fits the unshaped body of [`AvatarBody`]'s model (the person is not the
+//! avatar's shape: it sizes the body to them and estimates their build as it tracks); it is
+//! made when that body first exists.
 
 use bevy::prelude::*;
 use fitroom_body::plugin::AvatarBody;
@@ -14,7 +15,6 @@ use fitroom_schedule::FitroomSystems;
 use fitroom_sensor::SensorFrame;
 use fitroom_sensor::plugin::SensorFeed;
 
-use crate::model::TrackBody;
 use crate::segment::Segmentation;
 use crate::tracker::{Tracked, Tracker, TrackerSettings};
 
@@ -94,8 +94,11 @@ fn track(
     let Some(frame) = &depth.latest else { return };
     if active.tracker.is_none() && skeleton.error.is_none() {
         let Some(body) = body else { return };
-        match TrackBody::new(&body.model, &body.model.positions) {
-            Ok(model) => active.tracker = Some(Tracker::new(model, TrackerSettings::default())),
+        // The person's build is estimated on a thread of its own: a frame does not wait.
+        let mut settings = TrackerSettings::default();
+        settings.shape.background = true;
+        match Tracker::estimating(body.model.clone(), settings) {
+            Ok(tracker) => active.tracker = Some(tracker),
             Err(e) => {
                 warn!("no skeleton tracker: {e}");
                 skeleton.error = Some(e.to_string());

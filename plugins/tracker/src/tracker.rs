@@ -5,6 +5,10 @@
 //! two kept. Out comes the Kinect v1 skeleton: 20 joints with positions, orientations and
 //! the SDK's three confidences.
 
+use std::sync::Arc;
+use std::thread::JoinHandle;
+
+use fitroom_body::{BodyModel, Shape};
 use fitroom_depth::{DepthFrame, HEIGHT, WIDTH};
 use fitroom_motion::retarget::twist_correction;
 use fitroom_sensor::{JointSample, KinectJoint, SensorFrame};
@@ -13,8 +17,9 @@ use serde::Serialize;
 
 use crate::extrema::{Part, geodesic_extrema};
 use crate::fit::{FitSettings, FitStats, Fitter, Observation};
-use crate::model::{Pose, Posed, TrackBody};
+use crate::model::{ModelError, Pose, Posed, TrackBody};
 use crate::segment::{SegmentSettings, Segmentation, Segmenter};
+use crate::shape::{Estimate, ShapeSearchError, ShapeSettings, Snapshot, estimate};
 use crate::silhouette::Silhouette;
 
 /// How the tracker runs.
@@ -36,6 +41,11 @@ pub struct TrackerSettings {
     /// The person's size as the body's scale, when known (e.g. measured); `None`: from
     /// their height when first seen whole.
     pub scale: Option<f32>,
+    /// How the person's build is estimated (by a tracker made with
+    /// [`Tracker::estimating`]).
+    pub shape: ShapeSettings,
+    /// Try the limbs a followed fit seems to have lost afresh ([`recover`]).
+    pub recover: bool,
 }
 
 impl Default for TrackerSettings {
@@ -50,6 +60,8 @@ impl Default for TrackerSettings {
             max_outside: 0.25,
             min_support: 4,
             scale: None,
+            shape: ShapeSettings::default(),
+            recover: true,
         }
     }
 }
@@ -120,6 +132,20 @@ impl Tracked {
     }
 }
 
+/// Where the estimate of the person's build is.
+enum Estimation {
+    /// The tracker keeps its body.
+    Off,
+    /// Keeping frames the person is tracked well in; frames since the last one kept.
+    Collecting(Vec<Snapshot>, usize),
+    /// The search runs on its own thread.
+    Running(JoinHandle<Result<Estimate, ShapeSearchError>>),
+    /// The body is the person's build (or the search failed: the body kept).
+    Done,
+}
+
+mod recover;
+
 /// The tracker's state between frames.
 pub struct Tracker {
     pub body: TrackBody,
@@ -138,18 +164,21 @@ pub struct Tracker {
     corrections: [Quat; KinectJoint::COUNT],
     /// How many times the fit was (re)started.
     pub starts: usize,
+    /// How many times a lost limb was found again ([`recover`]), and that search's fitter.
+    pub recoveries: usize,
+    recovery: Fitter,
+    /// The body model the person's build is estimated with (`None`: no estimation).
+    model: Option<Arc<BodyModel>>,
+    estimation: Estimation,
+    /// The build estimated for the person tracked, and its search's report.
+    pub shape: Option<Estimate>,
 }
 
 impl Tracker {
+    /// A tracker that fits `body` as it is.
     pub fn new(body: TrackBody, settings: TrackerSettings) -> Self {
-        let mut corrections = [Quat::IDENTITY; KinectJoint::COUNT];
-        for joint in KinectJoint::ALL {
-            if joint.parent().is_some() {
-                let rest = body.rest_driver_rotations[joint.index()];
-                corrections[joint.index()] = twist_correction(rest, joint).inverse();
-            }
-        }
         Self {
+            corrections: corrections(&body),
             body,
             segmenter: Segmenter::new(settings.segment),
             settings,
@@ -159,8 +188,109 @@ impl Tracker {
             points: Vec::new(),
             pose: None,
             scale: None,
-            corrections,
             starts: 0,
+            recoveries: 0,
+            recovery: Fitter::default(),
+            model: None,
+            estimation: Estimation::Off,
+            shape: None,
+        }
+    }
+
+    /// A tracker that starts from `model`'s default body and estimates each person's build
+    /// while tracking them ([`crate::shape`]).
+    pub fn estimating(
+        model: Arc<BodyModel>,
+        settings: TrackerSettings,
+    ) -> Result<Self, ModelError> {
+        let body = TrackBody::new(&model, &model.positions)?;
+        Ok(Self {
+            model: Some(model),
+            estimation: Estimation::Collecting(Vec::new(), usize::MAX),
+            ..Self::new(body, settings)
+        })
+    }
+
+    /// The person's build, once estimated.
+    pub fn person_shape(&self) -> Option<&Shape> {
+        self.shape.as_ref().map(|e| &e.shape)
+    }
+
+    /// Keeps `tracked`'s frame for the build's search if the person is tracked well in it;
+    /// runs the search when enough are kept; takes its answer when it is ready.
+    fn estimate_shape(&mut self, frame: &DepthFrame, tracked: &Tracked) {
+        let settings = self.settings.shape;
+        let good = !tracked.started
+            && tracked.fit.inliers >= 0.8
+            && tracked.fit.outside <= 0.1
+            && tracked.person.bbox[1] > 0
+            && usize::from(tracked.person.bbox[3]) + 1 < HEIGHT;
+        match &mut self.estimation {
+            Estimation::Collecting(kept, since) => {
+                *since = since.saturating_add(1);
+                if !good || *since < settings.every {
+                    return;
+                }
+                *since = 0;
+                kept.push(Snapshot {
+                    frame: frame.clone(),
+                    pose: tracked.pose.clone(),
+                });
+                if kept.len() < settings.snapshots {
+                    return;
+                }
+                let Some(model) = self.model.clone() else {
+                    return;
+                };
+                let kept = std::mem::take(kept);
+                let (body, mut tracker_settings) = (self.body.clone(), self.settings);
+                tracker_settings.points = settings.points;
+                let search =
+                    move || estimate(&model, &body, &kept, &tracker_settings, settings.iterations);
+                if settings.background {
+                    self.estimation = Estimation::Running(std::thread::spawn(search));
+                } else {
+                    let found = search();
+                    self.adopt(found);
+                }
+            }
+            Estimation::Running(handle) if handle.is_finished() => {
+                let Estimation::Running(handle) =
+                    std::mem::replace(&mut self.estimation, Estimation::Done)
+                else {
+                    return;
+                };
+                let found = handle.join().unwrap_or(Err(ShapeSearchError::Stopped));
+                self.adopt(found);
+            }
+            _ => {}
+        }
+    }
+
+    /// Fits the person with the body of their build from now on, at the same size.
+    fn adopt(&mut self, found: Result<Estimate, ShapeSearchError>) {
+        self.estimation = Estimation::Done;
+        let estimate = match found {
+            Ok(e) => e,
+            Err(_) => return,
+        };
+        let resize = self.body.height_m / estimate.body.height_m;
+        if let Some(scale) = &mut self.scale {
+            *scale *= resize;
+        }
+        if let Some(pose) = &mut self.pose {
+            pose.scale *= resize;
+        }
+        self.body = estimate.body.clone();
+        self.corrections = corrections(&self.body);
+        self.shape = Some(estimate);
+    }
+
+    /// A new person: their build is estimated anew (the body kept until then).
+    fn forget_shape(&mut self) {
+        if self.model.is_some() {
+            self.estimation = Estimation::Collecting(Vec::new(), usize::MAX);
+            self.shape = None;
         }
     }
 
@@ -169,6 +299,7 @@ impl Tracker {
         self.pose = None;
         self.scale = None;
         self.segmenter.reset();
+        self.forget_shape();
     }
 
     /// The skeleton in `frame`, `None` when no one is there.
@@ -176,6 +307,7 @@ impl Tracker {
         let Some(person) = self.segmenter.segment(frame) else {
             self.pose = None;
             self.scale = None;
+            self.forget_shape();
             return None;
         };
         self.sample_points(frame, &person);
@@ -185,6 +317,11 @@ impl Tracker {
         let (pose, fit) = match self.pose.take() {
             Some(mut pose) => {
                 let fit = self.fit(frame, &person, &mut pose, &[], settings.iterations);
+                let (pose, fit) = if settings.recover {
+                    self.recover(frame, &person, pose, fit)
+                } else {
+                    (pose, fit)
+                };
                 if fit.inliers < settings.min_inliers || fit.outside > settings.max_outside {
                     let (fresh, fresh_fit) = self.start(frame, &person);
                     started = true;
@@ -208,13 +345,30 @@ impl Tracker {
         }
         let joints = self.joints(frame, &pose);
         self.pose = Some(pose.clone());
-        Some(Tracked {
+        let tracked = Tracked {
             joints,
             pose,
             fit,
             started,
             person,
-        })
+        };
+        self.estimate_shape(frame, &tracked);
+        Some(tracked)
+    }
+
+    /// Fits `pose` to `frame` for `iterations` steps as a frame being followed, the person
+    /// segmented afresh, leaving the tracker's state between frames alone: what a body makes
+    /// of a frame it did not track (for comparing bodies). `None` when no one is in `frame`.
+    pub fn refit(
+        &mut self,
+        frame: &DepthFrame,
+        pose: &mut Pose,
+        iterations: usize,
+    ) -> Option<FitStats> {
+        let person = Segmenter::new(self.settings.segment).segment(frame)?;
+        self.sample_points(frame, &person);
+        self.silhouette.update(&person.mask, person.bbox);
+        Some(self.fit(frame, &person, pose, &[], iterations))
     }
 
     /// About [`TrackerSettings::points`] of the person's readings on a regular grid.
@@ -384,6 +538,18 @@ impl Tracker {
         }
         out
     }
+}
+
+/// Per Kinect bone, the inverse of the motion pipeline's constant `C` for `body`.
+fn corrections(body: &TrackBody) -> [Quat; KinectJoint::COUNT] {
+    let mut out = [Quat::IDENTITY; KinectJoint::COUNT];
+    for joint in KinectJoint::ALL {
+        if joint.parent().is_some() {
+            let rest = body.rest_driver_rotations[joint.index()];
+            out[joint.index()] = twist_correction(rest, joint).inverse();
+        }
+    }
+    out
 }
 
 /// Which of two fits explains the frame better.

@@ -15,26 +15,46 @@ use glam::{Affine3A, Quat, Vec3};
 
 pub struct Body {
     pub model: BodyModel,
+    /// The body's vertices (the model's own, or shaped).
+    pub positions: Vec<Vec3>,
     pub rest: RestPose,
     pub standing: Affine3A,
 }
 
-pub fn body() -> Body {
+pub fn model() -> BodyModel {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
-    let model = BodyModel::read(&path).expect("the shipped body");
-    let rest = model.rest_pose(&model.positions);
-    let standing = model.standing_in_sensor_space(&model.positions);
-    Body {
-        model,
-        rest,
-        standing,
-    }
+    BodyModel::read(&path).expect("the shipped body")
+}
+
+/// The shipped body, MakeHuman's default build.
+pub fn body() -> Body {
+    let model = model();
+    let positions = model.positions.clone();
+    Body::of(model, positions)
+}
+
+/// The shipped body shaped to `shape`.
+pub fn shaped_body(shape: &fitroom_body::Shape) -> Body {
+    let model = model();
+    let positions = model.shaped(shape).expect("a valid shape").positions;
+    Body::of(model, positions)
 }
 
 /// Model-space turns (axis, degrees) of named bones about their heads, applied parents first.
 pub type Turns<'a> = &'a [(&'a str, Vec3, f32)];
 
 impl Body {
+    fn of(model: BodyModel, positions: Vec<Vec3>) -> Self {
+        let rest = model.rest_pose(&positions);
+        let standing = model.standing_in_sensor_space(&positions);
+        Self {
+            model,
+            positions,
+            rest,
+            standing,
+        }
+    }
+
     pub fn bone(&self, name: &str) -> usize {
         self.model
             .bone_index(name)
@@ -61,7 +81,7 @@ impl Body {
         let place = |p: Vec3| self.standing.transform_point3(p) + spot;
         let skin = self
             .model
-            .skin_positions(&self.model.positions, &self.rest, &globals);
+            .skin_positions(&self.positions, &self.rest, &globals);
         let n = self.model.body_vertex_count as usize;
         let head = |name: &str| globals[self.bone(name)].translation;
         let joints = JOINT_BONES

@@ -1,0 +1,159 @@
+//! Limbs the fit lost, found again. Followed from the last frame, a fit is a local search: a
+//! leg that crossed over its neighbour as they passed in a walk stays crossed, an arm that
+//! went behind the body or folded into the chest stays there while the data points of the
+//! real arm are left unexplained. Such a limb is suspected (legs whose knees or ankles lie in
+//! the other's order than the hips; a limb with almost no data points on it; every limb when
+//! much of the person is left unexplained) and a second
+//! hypothesis is fitted: the limb (both legs, for crossed legs) back at rest and pulled to
+//! the geodesic extrema of its hand or foot, as a start is. The hypothesis is kept when it
+//! explains the frame better.
+
+use fitroom_depth::DepthFrame;
+use fitroom_sensor::KinectJoint;
+
+use super::{Tracker, score};
+use crate::extrema::{Part, geodesic_extrema};
+use crate::fit::{FitStats, Observation};
+use crate::model::Pose;
+use crate::segment::Segmentation;
+
+/// A limb and the rig bones that move it, shoulder or hip first.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub(super) enum Limb {
+    ArmLeft,
+    ArmRight,
+    LegLeft,
+    LegRight,
+}
+
+impl Limb {
+    const ALL: [Self; 4] = [Self::ArmLeft, Self::ArmRight, Self::LegLeft, Self::LegRight];
+
+    /// The Kinect joints whose bones' drivers move the limb: upper arm or thigh, forearm or
+    /// shin, hand or foot.
+    fn joints(self) -> [KinectJoint; 3] {
+        use KinectJoint::*;
+        match self {
+            Self::ArmLeft => [ElbowLeft, WristLeft, HandLeft],
+            Self::ArmRight => [ElbowRight, WristRight, HandRight],
+            Self::LegLeft => [KneeLeft, AnkleLeft, FootLeft],
+            Self::LegRight => [KneeRight, AnkleRight, FootRight],
+        }
+    }
+
+    /// Its end, as the extrema name it.
+    fn end(self) -> Part {
+        match self {
+            Self::ArmLeft => Part::HandLeft,
+            Self::ArmRight => Part::HandRight,
+            Self::LegLeft => Part::FootLeft,
+            Self::LegRight => Part::FootRight,
+        }
+    }
+
+    fn end_joint(self) -> KinectJoint {
+        match self {
+            Self::ArmLeft => KinectJoint::HandLeft,
+            Self::ArmRight => KinectJoint::HandRight,
+            Self::LegLeft => KinectJoint::FootLeft,
+            Self::LegRight => KinectJoint::FootRight,
+        }
+    }
+}
+
+/// A limb with fewer data points on its upper and lower bones than this is suspected lost.
+const MIN_LIMB_SUPPORT: u32 = 6;
+/// Above this share of the person's points far from the body, every limb is suspected.
+const MAX_OUTLIERS: f32 = 0.03;
+/// Legs are crossed when a knee or an ankle lies this far on the other leg's side, metres.
+const CROSSED_M: f32 = 0.02;
+/// A hypothesis replaces the followed fit when its score is better by this much.
+const BETTER_BY: f32 = 0.01;
+
+impl Tracker {
+    /// The limbs suspected lost in the fit of `pose` (the fitter's support is that fit's).
+    fn suspects(&mut self, pose: &Pose, fit: &FitStats) -> Vec<Vec<Limb>> {
+        self.body.pose_into(pose, &mut self.posed);
+        let joints = self.body.kinect_joints(&self.posed);
+        let at = |j: KinectJoint| joints[j.index()];
+        let mut out = Vec::new();
+        // Crossed legs: the knees' or ankles' left-right order against the hips'.
+        let across = at(KinectJoint::HipLeft) - at(KinectJoint::HipRight);
+        let side = |l: KinectJoint, r: KinectJoint| (at(l) - at(r)).dot(across.normalize_or_zero());
+        if side(KinectJoint::KneeLeft, KinectJoint::KneeRight) < -CROSSED_M
+            || side(KinectJoint::AnkleLeft, KinectJoint::AnkleRight) < -CROSSED_M
+        {
+            out.push(vec![Limb::LegLeft, Limb::LegRight]);
+        }
+        let mut support = vec![0u32; self.body.parents.len()];
+        for (capsule, &n) in self.body.capsules.iter().zip(&self.fitter.support) {
+            support[capsule.bone] += n;
+        }
+        for limb in Limb::ALL {
+            let seen: u32 = limb.joints()[..2]
+                .iter()
+                .map(|j| support[self.body.drivers[j.index()]])
+                .sum();
+            // A part of the person left unexplained: any limb may be the one missing there.
+            let unexplained = fit.outliers > MAX_OUTLIERS;
+            if (seen < MIN_LIMB_SUPPORT || unexplained)
+                && !out.iter().any(|s: &Vec<Limb>| s.contains(&limb))
+            {
+                out.push(vec![limb]);
+            }
+        }
+        out
+    }
+
+    /// Tries the suspected limbs of the followed fit (`pose`, `fit`) at rest, pulled to their
+    /// extrema; returns the better pose and its fit.
+    pub(super) fn recover(
+        &mut self,
+        frame: &DepthFrame,
+        person: &Segmentation,
+        pose: Pose,
+        fit: FitStats,
+    ) -> (Pose, FitStats) {
+        let suspects = self.suspects(&pose, &fit);
+        if suspects.is_empty() {
+            return (pose, fit);
+        }
+        let ends = geodesic_extrema(frame, person);
+        let (mut best, mut best_fit) = (pose, fit);
+        for limbs in suspects {
+            let mut candidate = best.clone();
+            let mut targets = Vec::new();
+            for &limb in &limbs {
+                for j in limb.joints() {
+                    candidate.local[self.body.drivers[j.index()]] = glam::Quat::IDENTITY;
+                }
+                if let Some(e) = ends.iter().find(|e| e.part == limb.end()) {
+                    targets.push((limb.end_joint().index(), e.joint, 1.0));
+                }
+            }
+            let mut fitter = std::mem::take(&mut self.recovery);
+            let obs = Observation {
+                frame,
+                mask: &person.mask,
+                silhouette: &self.silhouette,
+                points: &self.points,
+                targets: &targets,
+            };
+            let n = self.settings.iterations;
+            fitter.fit(&self.body, &mut candidate, &obs, &self.settings.fit, n);
+            let obs = Observation {
+                targets: &[],
+                ..obs
+            };
+            let candidate_fit = fitter.fit(&self.body, &mut candidate, &obs, &self.settings.fit, n);
+            if candidate.is_finite() && score(&candidate_fit) > score(&best_fit) + BETTER_BY {
+                // The kept fit's support is the hypothesis's: swap the fitters.
+                std::mem::swap(&mut self.fitter, &mut fitter);
+                (best, best_fit) = (candidate, candidate_fit);
+                self.recoveries += 1;
+            }
+            self.recovery = fitter;
+        }
+        (best, best_fit)
+    }
+}

@@ -1,0 +1,112 @@
+//! The person's build, estimated while tracking, on bodies the search was not tuned on (it was
+//! tuned on three ANSUR II builds walking CMU clips; these are MakeHuman builds made from its
+//! sliders, moving their arms): the estimated body puts the trunk's joints nearer the truth
+//! than the default body sized to the person's height does.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::{ARMS_OUT, REACH_AND_STEP, render, scene, shaped_body};
+use fitroom_body::Shape;
+use fitroom_depth::synthetic::Label;
+use fitroom_tracker::eval::TRUNK;
+use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
+use glam::Vec3;
+
+/// Mean trunk error (m) over the frames after `from` of the person of `shape` moving their
+/// arms, 2.6 m away, with a tracker that keeps the default body and one that estimates the
+/// build; and the estimated build.
+fn trunk_errors(shape: &Shape, from: usize) -> (f32, f32, Shape) {
+    let person = shaped_body(shape);
+    let model = Arc::new(common::model());
+    let default_body = TrackBody::new(&model, &model.positions).expect("a trackable body");
+    let mut fixed = Tracker::new(default_body, TrackerSettings::default());
+    let mut estimating =
+        Tracker::estimating(model.clone(), TrackerSettings::default()).expect("a tracker");
+    let (mut sum_fixed, mut sum_estimated, mut n) = (0.0, 0.0, 0);
+    for k in 0..70 {
+        let t = k as f32 / 30.0;
+        // Arms rise and fall; from the middle on, a reach and a step as well.
+        let mut turns: Vec<(&str, Vec3, f32)> = ARMS_OUT.to_vec();
+        if k >= 35 {
+            turns.extend_from_slice(REACH_AND_STEP);
+        }
+        let share = 0.35 + 0.3 * (t * 2.0).sin();
+        let (skin, truth) = person.posed(&person.locals(&turns, share), Vec3::new(0.1, -0.8, 2.6));
+        let frame = render(
+            &scene(vec![(skin, Label::Body)], &person.model.triangles),
+            k as u64 + 40,
+            f64::from(t),
+        );
+        let a = fixed.track(&frame).expect("tracked with the default body");
+        let b = estimating.track(&frame).expect("tracked while estimating");
+        if k >= from {
+            let trunk = |found: &fitroom_tracker::Tracked| {
+                TRUNK
+                    .iter()
+                    .map(|j| found.joints[j.index()].position.distance(truth[j.index()]))
+                    .sum::<f32>()
+                    / TRUNK.len() as f32
+            };
+            sum_fixed += trunk(&a);
+            sum_estimated += trunk(&b);
+            n += 1;
+        }
+    }
+    let estimate = estimating
+        .person_shape()
+        .cloned()
+        .expect("the build estimated within the first second and a half");
+    (sum_fixed / n as f32, sum_estimated / n as f32, estimate)
+}
+
+#[test]
+fn a_broad_mans_build_puts_his_trunk_joints_nearer_the_truth() {
+    let broad = Shape {
+        gender: 1.0,
+        weight: 0.9,
+        muscle: 0.7,
+        ..Shape::default()
+    };
+    let (fixed, estimated, found) = trunk_errors(&broad, 40);
+    println!(
+        "trunk: default body {:.1} mm, estimated build {:.1} mm; found gender {:.2} weight {:.2} muscle {:.2}",
+        fixed * 1000.0,
+        estimated * 1000.0,
+        found.gender,
+        found.weight,
+        found.muscle
+    );
+    assert!(
+        estimated < fixed * 0.85,
+        "trunk error {:.1} mm with the estimate vs {:.1} mm without",
+        estimated * 1000.0,
+        fixed * 1000.0
+    );
+}
+
+#[test]
+fn a_slight_womans_build_puts_her_trunk_joints_nearer_the_truth() {
+    let slight = Shape {
+        gender: 0.0,
+        weight: 0.2,
+        height: 0.3,
+        ..Shape::default()
+    };
+    let (fixed, estimated, found) = trunk_errors(&slight, 40);
+    println!(
+        "trunk: default body {:.1} mm, estimated build {:.1} mm; found gender {:.2} weight {:.2} muscle {:.2}",
+        fixed * 1000.0,
+        estimated * 1000.0,
+        found.gender,
+        found.weight,
+        found.muscle
+    );
+    assert!(
+        estimated < fixed * 0.85,
+        "trunk error {:.1} mm with the estimate vs {:.1} mm without",
+        estimated * 1000.0,
+        fixed * 1000.0
+    );
+}
