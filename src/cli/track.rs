@@ -248,7 +248,8 @@ fn print_eval(r: &TrackEvalReport) {
     println!(
         "overall: {} frames ({} tracked, {} wholly in view): mean {:.1} mm, trunk {:.1} mm, \
          p95 {:.0} mm; every joint tracked or inferred in {:.1} %; {} starts; {:.2} ms per \
-         frame (p95 {:.2})",
+         frame (p95 {:.2}); {} searches for the person's build, {:.0} ms each (the app runs \
+         them on a thread of their own)",
         o.frames,
         o.tracked_frames,
         o.in_view_frames,
@@ -258,7 +259,9 @@ fn print_eval(r: &TrackEvalReport) {
         o.all_joints_pct,
         o.starts,
         o.time_mean_ms,
-        o.time_p95_ms
+        o.time_p95_ms,
+        o.shape_searches,
+        o.shape_search_mean_ms
     );
     println!(
         "  {:<16} {:>8} {:>8} {:>9} {:>9}",
@@ -314,7 +317,8 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
             let joints: Vec<Vec3> = line.joints.iter().map(|j| Vec3::from_array(*j)).collect();
             // Time and score once; the overall figures take the same result.
             let out = one.step(&mut tracker, &frame, &joints);
-            overall.record(&frame, &joints, out.as_ref(), one.last_time_ms());
+            let (ms, search_ms) = one.last_time_ms();
+            overall.record(&frame, &joints, out.as_ref(), ms, search_ms);
             if png.is_some() && recordings.is_empty() && shown.contains(&i) {
                 let rgb = fitroom_tracker::draw::picture(&frame, out.as_ref(), &joints);
                 pictures.push((rgb, out.as_ref().map(|t| t.person.bbox)));

@@ -52,9 +52,13 @@ pub struct EvalReport {
     pub all_joints_pct: f64,
     /// Fits (re)started from the extrema.
     pub starts: usize,
-    /// Time per frame (segmentation and fit), ms.
+    /// Time per frame (segmentation and fit), ms; without the searches for the person's
+    /// build, which the app runs on a thread of its own (here they run in the frame that
+    /// completes their snapshots): their count and mean time follow.
     pub time_mean_ms: f64,
     pub time_p95_ms: f64,
+    pub shape_searches: usize,
+    pub shape_search_mean_ms: f64,
     pub joints: Vec<JointReport>,
 }
 
@@ -69,6 +73,8 @@ pub struct Evaluation {
     tracked: Vec<usize>,
     inferred: Vec<usize>,
     times_ms: Vec<f64>,
+    searches_ms: Vec<f64>,
+    last_search_ms: Option<f64>,
 }
 
 impl Evaluation {
@@ -91,13 +97,24 @@ impl Evaluation {
         let start = Instant::now();
         let out = tracker.track(frame);
         let ms = start.elapsed().as_secs_f64() * 1000.0;
-        self.record(frame, truth, out.as_ref(), ms);
+        let search = tracker.search_ms;
+        self.record(
+            frame,
+            truth,
+            out.as_ref(),
+            ms - search.unwrap_or(0.0),
+            search,
+        );
         out
     }
 
-    /// The time of the last frame recorded, ms.
-    pub fn last_time_ms(&self) -> f64 {
-        self.times_ms.last().copied().unwrap_or(0.0)
+    /// The time of the last frame recorded (without a search for the build), ms, and that
+    /// search's, if one ran in it.
+    pub fn last_time_ms(&self) -> (f64, Option<f64>) {
+        (
+            self.times_ms.last().copied().unwrap_or(0.0),
+            self.last_search_ms,
+        )
     }
 
     /// Scores a result already made (`tracked`, which took `ms`) against `truth`.
@@ -107,8 +124,11 @@ impl Evaluation {
         truth: &[Vec3],
         tracked: Option<&Tracked>,
         ms: f64,
+        search_ms: Option<f64>,
     ) {
         self.times_ms.push(ms);
+        self.searches_ms.extend(search_ms);
+        self.last_search_ms = search_ms;
         self.frames += 1;
         let camera = frame.camera;
         let in_view = truth.len() == KinectJoint::COUNT
@@ -164,6 +184,8 @@ impl Evaluation {
             starts,
             time_mean_ms: time.mean,
             time_p95_ms: time.p95,
+            shape_searches: self.searches_ms.len(),
+            shape_search_mean_ms: Summary::of(&self.searches_ms).mean,
             joints: KinectJoint::ALL
                 .iter()
                 .map(|j| {

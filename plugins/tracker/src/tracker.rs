@@ -167,11 +167,15 @@ pub struct Tracker {
     /// How many times a lost limb was found again ([`recover`]), and that search's fitter.
     pub recoveries: usize,
     recovery: Fitter,
-    /// The body model the person's build is estimated with (`None`: no estimation).
+    /// The body model the person's build is estimated with (`None`: no estimation), and
+    /// its default body (each new person's until their build is known).
     model: Option<Arc<BodyModel>>,
+    default_body: Option<Box<TrackBody>>,
     estimation: Estimation,
     /// The build estimated for the person tracked, and its search's report.
     pub shape: Option<Estimate>,
+    /// The time of the search for the build, ms, if one ran in the last frame tracked.
+    pub search_ms: Option<f64>,
 }
 
 impl Tracker {
@@ -192,8 +196,10 @@ impl Tracker {
             recoveries: 0,
             recovery: Fitter::default(),
             model: None,
+            default_body: None,
             estimation: Estimation::Off,
             shape: None,
+            search_ms: None,
         }
     }
 
@@ -206,6 +212,7 @@ impl Tracker {
         let body = TrackBody::new(&model, &model.positions)?;
         Ok(Self {
             model: Some(model),
+            default_body: Some(Box::new(body.clone())),
             estimation: Estimation::Collecting(Vec::new(), usize::MAX),
             ..Self::new(body, settings)
         })
@@ -250,7 +257,9 @@ impl Tracker {
                 if settings.background {
                     self.estimation = Estimation::Running(std::thread::spawn(search));
                 } else {
+                    let start = std::time::Instant::now();
                     let found = search();
+                    self.search_ms = Some(start.elapsed().as_secs_f64() * 1e3);
                     self.adopt(found);
                 }
             }
@@ -286,11 +295,19 @@ impl Tracker {
         self.shape = Some(estimate);
     }
 
-    /// A new person: their build is estimated anew (the body kept until then).
+    /// A new person: the default body until their build is estimated anew (a body of the
+    /// last person's build fits the next one worse than the default: on 90 recordings
+    /// evaluated one after the other, 128 mm against 92).
     fn forget_shape(&mut self) {
-        if self.model.is_some() {
-            self.estimation = Estimation::Collecting(Vec::new(), usize::MAX);
-            self.shape = None;
+        if self.model.is_none() {
+            return;
+        }
+        self.estimation = Estimation::Collecting(Vec::new(), usize::MAX);
+        if self.shape.take().is_some()
+            && let Some(body) = &self.default_body
+        {
+            self.body = (**body).clone();
+            self.corrections = corrections(&self.body);
         }
     }
 
@@ -304,6 +321,7 @@ impl Tracker {
 
     /// The skeleton in `frame`, `None` when no one is there.
     pub fn track(&mut self, frame: &DepthFrame) -> Option<Tracked> {
+        self.search_ms = None;
         let Some(person) = self.segmenter.segment(frame) else {
             self.pose = None;
             self.scale = None;

@@ -110,3 +110,45 @@ fn a_slight_womans_build_puts_her_trunk_joints_nearer_the_truth() {
         fixed * 1000.0
     );
 }
+
+/// When the person leaves, the next one is someone else: the default body again, their build
+/// estimated anew.
+#[test]
+fn the_next_person_starts_from_the_default_body() {
+    let broad = Shape {
+        gender: 1.0,
+        weight: 0.9,
+        ..Shape::default()
+    };
+    let person = shaped_body(&broad);
+    let model = Arc::new(common::model());
+    let default_height = TrackBody::new(&model, &model.positions)
+        .expect("a trackable body")
+        .height_m;
+    let mut tracker =
+        Tracker::estimating(model.clone(), TrackerSettings::default()).expect("a tracker");
+    let mut k = 0;
+    while tracker.person_shape().is_none() {
+        assert!(k < 60, "no build estimated in 2 s");
+        let share = 0.3 + 0.3 * (k as f32 / 10.0).sin();
+        let (skin, _) = person.posed(&person.locals(ARMS_OUT, share), Vec3::new(0.0, -0.8, 2.6));
+        let frame = render(
+            &scene(vec![(skin, Label::Body)], &person.model.triangles),
+            k,
+            k as f64 / 30.0,
+        );
+        tracker.track(&frame);
+        k += 1;
+    }
+    assert_ne!(
+        tracker.body.height_m, default_height,
+        "the build's body is in use"
+    );
+    let empty = render(&scene(vec![], &person.model.triangles), 99, 3.0);
+    assert!(tracker.track(&empty).is_none());
+    assert!(tracker.person_shape().is_none());
+    assert_eq!(
+        tracker.body.height_m, default_height,
+        "the default body again"
+    );
+}
