@@ -4,9 +4,11 @@
 //! detector (segmentation, then geodesic extrema for head, hands and feet).
 
 use std::path::{Path, PathBuf};
+use std::sync::Arc;
 
 use anyhow::{Context, Result, bail};
 use clap::Subcommand;
+use fitroom_body::BodyModel;
 use fitroom_depth::DepthCamera;
 use fitroom_depth::fakenect::Recording;
 use fitroom_depth::truth::read_truth;
@@ -275,12 +277,15 @@ fn print_eval(r: &TrackEvalReport) {
     }
 }
 
-/// The tracker for the body of `--body` (the shipped one by default), estimating each
-/// person's build as it tracks them (in the frame that completes its snapshots: the same
-/// recording gives the same figures).
-fn tracker(body: &BodyArg) -> Result<Tracker> {
-    let model = body.load()?;
-    Tracker::estimating(std::sync::Arc::new(model), TrackerSettings::default())
+/// The body of `--body` (the shipped one by default), for trackers.
+fn track_model(body: &BodyArg) -> Result<Arc<BodyModel>> {
+    Ok(Arc::new(body.load()?))
+}
+
+/// A tracker for `model`, estimating each person's build as it tracks them (in the frame that
+/// completes its snapshots: the same recording gives the same figures).
+fn tracker(model: &Arc<BodyModel>) -> Result<Tracker> {
+    Tracker::estimating(model.clone(), TrackerSettings::default())
         .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")
 }
 
@@ -289,9 +294,10 @@ const PICTURE_AT: [f64; 4] = [0.1, 0.35, 0.6, 0.85];
 
 fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEvalReport> {
     let mut pictures: Vec<(Vec<u8>, Option<[u16; 4]>)> = Vec::new();
-    let mut tracker = tracker(body)?;
+    let model = track_model(body)?;
     let camera = DepthCamera::default();
     let mut overall = Evaluation::new();
+    let mut starts = 0;
     let mut recordings = Vec::new();
     for dump in dumps {
         let recording = Recording::open(dump)?;
@@ -302,8 +308,10 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
                 dump.display()
             );
         };
-        tracker.reset();
-        let starts = tracker.starts;
+        // A tracker of its own: nothing of one recording (its floor, its person's build)
+        // carries into the next, so each one's figures do not depend on the order (they did,
+        // by 57 mm on a T-shirt recording the fit loses a limb in).
+        let mut tracker = tracker(&model)?;
         let mut one = Evaluation::new();
         let count = recording.depth_count();
         let shown: Vec<usize> = PICTURE_AT
@@ -324,7 +332,8 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
                 pictures.push((rgb, out.as_ref().map(|t| t.person.bbox)));
             }
         }
-        let r = one.report(tracker.starts - starts);
+        starts += tracker.starts;
+        let r = one.report(tracker.starts);
         recordings.push(RecordingEval {
             dump: dump.display().to_string(),
             frames: r.frames,
@@ -339,7 +348,7 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
         write_pictures(png, &pictures)?;
     }
     Ok(TrackEvalReport {
-        overall: overall.report(tracker.starts),
+        overall: overall.report(starts),
         recordings,
     })
 }
@@ -429,7 +438,7 @@ pub struct RunFrame {
 }
 
 fn track_run(dump: &Path, body: &BodyArg) -> Result<RunReport> {
-    let mut tracker = tracker(body)?;
+    let mut tracker = tracker(&track_model(body)?)?;
     let recording = Recording::open(dump)?;
     let mut frames = Vec::new();
     for (i, entry) in recording.depth_entries().enumerate() {
