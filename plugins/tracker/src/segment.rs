@@ -107,8 +107,8 @@ const MAX_DEPTH_M: f32 = 1.2;
 
 /// Bordering components are told apart in depth by at least this much, metres.
 const NEARER_M: f32 = 0.05;
-/// Something the image's top edge cuts off this high above the floor or higher is taller than
-/// a person (a wall), metres.
+/// The image's top edge meets a person's head lower than this above the floor, metres (it may
+/// meet their raised hands higher).
 const MAX_CUT_TOP_M: f32 = 2.0;
 /// Fewer bordered row sides than this say nothing of what is in front.
 const MIN_SIDES: u32 = 8;
@@ -126,7 +126,8 @@ struct Stats {
     top_m: f32,
     bottom_m: f32,
     touches_bottom_row: bool,
-    touches_top_row: bool,
+    /// Its pixels in the image's top row.
+    top_row_pixels: usize,
     /// Frontal area of the component's pixels, m² (each pixel covers (z/f)²).
     area_m2: f32,
     overlap: usize,
@@ -158,7 +159,16 @@ impl Stats {
             && extent.x < MAX_WIDTH_M
             && extent.z < MAX_DEPTH_M
             && !self.mostly_behind()
-            && !(self.touches_top_row && self.top_m > MAX_CUT_TOP_M)
+            && !self.cut_like_a_wall()
+    }
+
+    /// Cut off by the image's top edge across its whole width (nine tenths of it: the sensor
+    /// drops a few readings), and that edge meets it higher than a person's head: a wall, not
+    /// a person (whose raised hands and head the edge may cut, across four fifths of a tall
+    /// man's width at most).
+    fn cut_like_a_wall(&self) -> bool {
+        let width = usize::from(self.bbox[2].saturating_sub(self.bbox[0])) + 1;
+        self.top_m > MAX_CUT_TOP_M && self.top_row_pixels * 10 > width * 9
     }
 
     /// A person stands in front of what surrounds them; a surface seen between nearer ones
@@ -364,7 +374,9 @@ impl Segmenter {
                 c.area_m2 += sa;
                 c.pixels += pixels.len();
                 c.touches_bottom_row |= j + 1 == HEIGHT;
-                c.touches_top_row |= j == 0;
+                if j == 0 {
+                    c.top_row_pixels += pixels.len();
+                }
                 c.bbox = [
                     c.bbox[0].min(run.start),
                     c.bbox[1].min(run.row),

@@ -148,7 +148,7 @@ struct Stats {
     top_m: f32,
     bottom_m: f32,
     touches_bottom_row: bool,
-    touches_top_row: bool,
+    top_row_pixels: usize,
     /// Frontal area of the component's pixels, m² (each pixel covers (z/f)²).
     area_m2: f32,
     overlap: usize,
@@ -179,7 +179,8 @@ impl Stats {
             && extent.x < 2.0
             && extent.z < 1.2
             && !(self.sides >= 8 && self.behind * 2 > self.sides)
-            && !(self.touches_top_row && self.top_m > 2.0)
+            && !(self.top_m > 2.0
+                && self.top_row_pixels * 10 > (usize::from(self.bbox[2] - self.bbox[0]) + 1) * 9)
     }
 }
 
@@ -252,7 +253,9 @@ impl FloodFill {
                 c.top_m = c.top_m.max(h);
                 c.bottom_m = c.bottom_m.min(h);
                 c.touches_bottom_row |= j + 1 == HEIGHT;
-                c.touches_top_row |= j == 0;
+                if j == 0 {
+                    c.top_row_pixels += 1;
+                }
                 c.area_m2 += pixel_area(p.z);
                 c.bbox = [
                     c.bbox[0].min(i as u16),

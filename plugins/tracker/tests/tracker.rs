@@ -152,6 +152,46 @@ fn a_strip_of_wall_beside_a_person_too_close_is_nobody() {
     }
 }
 
+/// A tall man's raised hands, which the image's top edge cuts off higher than a head could
+/// be: still a person (the wall rule above is about surfaces the edge cuts over most of their
+/// width; it first took every component the edge cut above 2 m for a wall, and lost people
+/// reaching up 3 m away).
+#[test]
+fn a_person_whose_raised_hands_leave_the_image_is_found() {
+    let tall = common::shaped_body(&fitroom_body::Shape {
+        gender: 1.0,
+        height: 1.0,
+        ..fitroom_body::Shape::default()
+    });
+    let mut segmenter = fitroom_tracker::segment::Segmenter::default();
+    let arms_up: common::Turns = &[
+        ("upperarm_l", Vec3::Z, 165.0),
+        ("upperarm_r", Vec3::Z, -165.0),
+    ];
+    for (k, z) in [3.1f32, 3.3].into_iter().enumerate() {
+        let (skin, truth) = tall.posed(&tall.locals(arms_up, 1.0), Vec3::new(0.0, -0.8, z));
+        let hand = truth[KinectJoint::HandLeft.index()];
+        let camera = DepthCamera::default();
+        assert!(
+            camera.project(hand).is_some_and(|p| p.y < 0.0),
+            "the test wants the hands above the image at {z} m: hand at {hand}"
+        );
+        let frame = render(
+            &scene(vec![(skin, Label::Body)], &tall.model.triangles),
+            k as u64,
+            0.0,
+        );
+        segmenter.reset();
+        let found = segmenter.segment(&frame).expect("the person is found");
+        assert!(
+            found.top_m > 2.0 && (found.centroid.z - z).abs() < 0.3,
+            "at {z} m: found one at {}, {} m high",
+            found.centroid,
+            found.top_m
+        );
+    }
+}
+
 #[test]
 fn legs_cut_off_by_the_image_are_not_tracked() {
     let body = body();
