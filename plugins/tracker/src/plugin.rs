@@ -28,7 +28,7 @@ pub enum TrackerSystems {
 #[derive(Resource, Default)]
 pub struct UserMap {
     /// `None`: nobody in view (or no depth yet).
-    pub person: Option<Segmentation>,
+    pub person: Option<std::sync::Arc<Segmentation>>,
     /// The depth frame (its count in [`DepthFeed`]) this map is of.
     pub frame: u64,
     /// Time to segment and track that frame, milliseconds.

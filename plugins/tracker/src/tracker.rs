@@ -110,7 +110,8 @@ pub struct Tracked {
     pub fit: FitStats,
     /// Whether this frame (re)started the fit from the extrema.
     pub started: bool,
-    pub person: Segmentation,
+    /// Shared: the app's user map holds the same one (no copy of the mask per frame).
+    pub person: Arc<Segmentation>,
 }
 
 impl Tracked {
@@ -368,7 +369,7 @@ impl Tracker {
             pose,
             fit,
             started,
-            person,
+            person: Arc::new(person),
         };
         self.estimate_shape(frame, &tracked);
         Some(tracked)
@@ -506,11 +507,7 @@ impl Tracker {
         self.body.pose_into(pose, &mut self.posed);
         let positions = self.body.kinect_joints(&self.posed);
         let turns = self.body.driver_turns(&self.posed);
-        // Evidence per bone: points on its capsules in the last fit step.
-        let mut support = vec![0u32; self.body.parents.len()];
-        for (capsule, &n) in self.body.capsules.iter().zip(&self.fitter.support) {
-            support[capsule.bone] += n;
-        }
+        let support = self.bone_support();
         let camera = frame.camera;
         let mut out = [TrackedJointOut {
             position: Vec3::ZERO,
@@ -555,6 +552,18 @@ impl Tracker {
             };
         }
         out
+    }
+}
+
+impl Tracker {
+    /// Per rig bone, the data points on its capsules in the last fit step (the evidence for
+    /// it).
+    fn bone_support(&self) -> Vec<u32> {
+        let mut support = vec![0u32; self.body.parents.len()];
+        for (capsule, &n) in self.body.capsules.iter().zip(&self.fitter.support) {
+            support[capsule.bone] += n;
+        }
+        support
     }
 }
 

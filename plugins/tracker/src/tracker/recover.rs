@@ -85,10 +85,7 @@ impl Tracker {
         {
             out.push(vec![Limb::LegLeft, Limb::LegRight]);
         }
-        let mut support = vec![0u32; self.body.parents.len()];
-        for (capsule, &n) in self.body.capsules.iter().zip(&self.fitter.support) {
-            support[capsule.bone] += n;
-        }
+        let support = self.bone_support();
         for limb in Limb::ALL {
             let seen: u32 = limb.joints()[..2]
                 .iter()
