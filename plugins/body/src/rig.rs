@@ -113,6 +113,14 @@ impl BodyModel {
     /// `(target index, weight)` pairs; unknown indices are ignored.
     pub fn apply_targets(&self, weights: &[(usize, f32)]) -> Vec<Vec3> {
         let mut out = self.positions.clone();
+        self.add_targets(&mut out, weights);
+        out
+    }
+
+    /// Adds morph targets to `positions` (the whole mesh, possibly morphed already):
+    /// `(target index, weight)` pairs; unknown indices are ignored. Targets are linear, so
+    /// a change of weights can be applied to a morphed mesh as the difference.
+    pub fn add_targets(&self, positions: &mut [Vec3], weights: &[(usize, f32)]) {
         for &(index, weight) in weights {
             let Some(target) = self.targets.get(index) else {
                 continue;
@@ -122,12 +130,11 @@ impl BodyModel {
             }
             let s = target.scale_m * weight;
             for (&i, d) in target.indices.iter().zip(&target.deltas) {
-                if let Some(p) = out.get_mut(i as usize) {
+                if let Some(p) = positions.get_mut(i as usize) {
                     *p += Vec3::new(d[0] as f32, d[1] as f32, d[2] as f32) * s;
                 }
             }
         }
-        out
     }
 
     /// Area-weighted normals of the body vertices (`body_vertex_count` of them) for the given

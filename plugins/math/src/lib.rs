@@ -1,13 +1,15 @@
 //! Small Bevy-free numerics shared by fitroom's crates and its CLI: summary statistics, the
-//! rigid transform, the round-cone distance and the spatial grid. Each is defined here once.
+//! rigid transform, the round-cone distance, the spatial grid and the small dense Cholesky solve. Each is defined here once.
 
 #![forbid(unsafe_code)]
 
 pub mod geometry;
 pub mod grid;
+pub mod linear;
 pub mod rigid;
 pub mod stats;
 
 pub use geometry::round_cone_distance;
 pub use grid::CellGrid;
+pub use linear::cholesky_solve;
 pub use rigid::RigidTransform;

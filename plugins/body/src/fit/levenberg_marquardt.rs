@@ -1,6 +1,6 @@
 //! The fit's inner loop (seed 002 §4.2 calibration, done as bounded, regularised least squares):
 //! Levenberg-Marquardt on the measure probe, a forward-difference Jacobian with Broyden updates,
-//! bounds by projection with an active set, and the small dense Cholesky solve it needs.
+//! bounds by projection with an active set.
 
 use super::probe_morph::ProbeMorph;
 use super::sliders::Param;
@@ -8,48 +8,10 @@ use super::{FitError, FitOptions};
 use crate::measure::MeasureProbe;
 use crate::model::BodyModel;
 use crate::modifiers::Shape;
+use fitroom_math::cholesky_solve;
 
 /// Longest step of one slider per Levenberg-Marquardt iteration.
 const MAX_STEP: f64 = 0.25;
-
-/// Solves `a x = b` for a symmetric positive definite `a` (n×n, row-major) by Cholesky;
-/// `None` if `a` is not positive definite.
-fn cholesky_solve(a: &[f64], b: &[f64], n: usize) -> Option<Vec<f64>> {
-    let mut l = vec![0.0f64; n * n];
-    for i in 0..n {
-        for j in 0..=i {
-            let mut s = a[i * n + j];
-            for k in 0..j {
-                s -= l[i * n + k] * l[j * n + k];
-            }
-            if i == j {
-                if s <= 0.0 {
-                    return None;
-                }
-                l[i * n + i] = s.sqrt();
-            } else {
-                l[i * n + j] = s / l[j * n + j];
-            }
-        }
-    }
-    let mut y = vec![0.0; n];
-    for i in 0..n {
-        let mut s = b[i];
-        for k in 0..i {
-            s -= l[i * n + k] * y[k];
-        }
-        y[i] = s / l[i * n + i];
-    }
-    let mut x = vec![0.0; n];
-    for i in (0..n).rev() {
-        let mut s = y[i];
-        for k in i + 1..n {
-            s -= l[k * n + i] * x[k];
-        }
-        x[i] = s / l[i * n + i];
-    }
-    Some(x)
-}
 
 /// The state of one fit.
 pub(super) struct Fitter<'a> {
@@ -230,21 +192,5 @@ impl Fitter<'_> {
             }
         }
         Ok((x, steps))
-    }
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn cholesky_solves_a_known_system() {
-        // A = [[4, 2], [2, 3]], x = [1, -2] -> b = [0, -4].
-        let x = cholesky_solve(&[4.0, 2.0, 2.0, 3.0], &[0.0, -4.0], 2).expect("SPD");
-        assert!(
-            (x[0] - 1.0).abs() < 1e-12 && (x[1] + 2.0).abs() < 1e-12,
-            "{x:?}"
-        );
-        assert!(cholesky_solve(&[1.0, 2.0, 2.0, 1.0], &[0.0, 0.0], 2).is_none());
     }
 }

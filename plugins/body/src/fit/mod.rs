@@ -48,7 +48,7 @@ mod levenberg_marquardt;
 mod probe_morph;
 mod sliders;
 
-pub use sliders::age_slider;
+pub use sliders::{Param, REGIONS, SLIDERS, age_slider};
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -57,7 +57,6 @@ use serde::{Deserialize, Serialize};
 
 use self::levenberg_marquardt::Fitter;
 use self::probe_morph::ProbeMorph;
-use self::sliders::{Param, REGIONS, SLIDERS};
 use crate::measure::{Measure, MeasureError, MeasureProbe, Measurements};
 use crate::model::BodyModel;
 use crate::modifiers::{Shape, ShapeError};

@@ -7,7 +7,10 @@ use crate::modifiers::Shape;
 
 /// One free slider.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Param {
+pub enum Param {
+    /// Not moved by the fit to measurements (gender is given there); the fit to depth
+    /// moves it.
+    Gender,
     Height,
     Weight,
     Muscle,
@@ -17,22 +20,23 @@ pub(super) enum Param {
 }
 
 impl Param {
-    pub(super) fn bounds(self) -> (f32, f32) {
+    pub fn bounds(self) -> (f32, f32) {
         match self {
             Param::Slider(_) | Param::Region(_) => (-1.0, 1.0),
             _ => (0.0, 1.0),
         }
     }
 
-    pub(super) fn rest(self) -> f32 {
+    pub fn rest(self) -> f32 {
         match self {
             Param::Slider(_) | Param::Region(_) => 0.0,
             _ => 0.5,
         }
     }
 
-    pub(super) fn name(self) -> String {
+    pub fn name(self) -> String {
         match self {
+            Param::Gender => "gender".into(),
             Param::Height => "height".into(),
             Param::Weight => "weight".into(),
             Param::Muscle => "muscle".into(),
@@ -42,8 +46,22 @@ impl Param {
         }
     }
 
-    pub(super) fn set(self, shape: &mut Shape, v: f32) {
+    /// This slider's value in `shape` (its rest value where `shape` does not set it).
+    pub fn get(self, shape: &Shape) -> f32 {
         match self {
+            Param::Gender => shape.gender,
+            Param::Height => shape.height,
+            Param::Weight => shape.weight,
+            Param::Muscle => shape.muscle,
+            Param::Proportions => shape.proportions,
+            Param::Slider(s) => shape.measures.get(s).copied().unwrap_or(0.0),
+            Param::Region(s) => shape.regions.get(s).copied().unwrap_or(0.0),
+        }
+    }
+
+    pub fn set(self, shape: &mut Shape, v: f32) {
+        match self {
+            Param::Gender => shape.gender = v,
             Param::Height => shape.height = v,
             Param::Weight => shape.weight = v,
             Param::Muscle => shape.muscle = v,
@@ -59,10 +77,12 @@ impl Param {
 
     /// The measures this slider moves (from a sensitivity scan of the MakeHuman targets:
     /// each slider at -1 and +1 on the default female and male bodies, effects above 0.3 cm).
-    pub(super) fn moves(self, m: Measure) -> bool {
+    pub fn moves(self, m: Measure) -> bool {
         use Measure::*;
         match self {
-            Param::Height | Param::Weight | Param::Muscle | Param::Proportions => true,
+            Param::Gender | Param::Height | Param::Weight | Param::Muscle | Param::Proportions => {
+                true
+            }
             Param::Slider(s) => match s {
                 "bust-circ" | "frontchest-dist" => matches!(m, Bust | Underbust | Waist | Neck),
                 "underbust-circ" => matches!(m, Bust | Underbust | Waist | NavelWaist),
@@ -104,7 +124,7 @@ impl Param {
 }
 
 /// The measure sliders the fit may use.
-pub(super) const SLIDERS: [&str; 17] = [
+pub const SLIDERS: [&str; 17] = [
     "bust-circ",
     "underbust-circ",
     "frontchest-dist",
@@ -126,7 +146,7 @@ pub(super) const SLIDERS: [&str; 17] = [
 
 /// The region scale sliders the fit may use (MakeHuman's `*-scale-*` targets of the neck,
 /// torso, hip and limbs; the ones with an effect on a measurement).
-pub(super) const REGIONS: [&str; 15] = [
+pub const REGIONS: [&str; 15] = [
     "neck-scale-depth",
     "neck-scale-horiz",
     "neck-back-scale-depth",

@@ -101,6 +101,37 @@ impl SizeChart {
         })
     }
 
+    /// A chart from one nominal body measurement per size and measure (a garment's own size
+    /// table), validated and ranged as a chart file's `nominal_cm` sizes are; `primary`
+    /// empty: every measure decides.
+    pub fn from_nominal(
+        name: &str,
+        gender: Gender,
+        primary: &[Measure],
+        sizes: &[(String, BTreeMap<Measure, f32>)],
+    ) -> Result<SizeChart, ChartProblem> {
+        Self::from_file(ChartFile {
+            name: name.to_owned(),
+            source: String::new(),
+            notes: String::new(),
+            gender,
+            primary: primary.iter().map(|m| m.name().to_owned()).collect(),
+            sizes: sizes
+                .iter()
+                .map(|(label, values)| SizeFile {
+                    label: label.clone(),
+                    nominal_cm: Entries(
+                        values
+                            .iter()
+                            .map(|(m, v)| (m.name().to_owned(), *v))
+                            .collect(),
+                    ),
+                    ranges_cm: Entries::default(),
+                })
+                .collect(),
+        })
+    }
+
     fn from_file(raw: ChartFile) -> Result<SizeChart, ChartProblem> {
         if raw.sizes.is_empty() {
             return Err(ChartProblem::NoSizes);
