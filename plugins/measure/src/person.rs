@@ -1,0 +1,65 @@
+//! Measuring one person: the body fitted twice, with the women's and with the men's shape
+//! prior (the camera does not know the gender, and a size chart is for one), the better
+//! explanation of the frames kept.
+
+use fitroom_body::BodyModel;
+use glam::Quat;
+
+use crate::MeasureError;
+use crate::fit::{BodyEstimate, FitSettings, fit_body};
+use crate::posed::{Placement, ShapeSpace};
+use crate::prior::ShapePrior;
+use crate::view::AveragedView;
+
+/// The person's body, as measured.
+#[derive(Clone, Debug)]
+pub struct PersonMeasurement {
+    /// Whether the women's prior explained the frames better.
+    pub female: bool,
+    pub estimate: BodyEstimate,
+    /// The other gender's fit's cost (the kept one's is `estimate.cost`).
+    pub other_cost: f64,
+}
+
+/// Fits `view` with both priors (at once when `settings.threads` ≥ 2) and keeps the better.
+pub fn measure_person(
+    model: &BodyModel,
+    view: &AveragedView,
+    locals: &[Quat],
+    placement: Placement,
+    prior: &ShapePrior,
+    settings: &FitSettings,
+) -> Result<PersonMeasurement, MeasureError> {
+    let space = ShapeSpace::full();
+    let one = |female: bool, threads: usize| {
+        let p = prior.of(female);
+        let start = space.shape(&p.mean);
+        let s = FitSettings {
+            threads,
+            ..settings.clone()
+        };
+        fit_body(model, view, locals, placement, &start, Some(p), &s)
+    };
+    let (women, men) = if settings.threads >= 2 {
+        let per = settings.threads / 2;
+        std::thread::scope(|scope| {
+            let w = scope.spawn(|| one(true, per));
+            let m = one(false, per);
+            (w.join().unwrap_or(Err(MeasureError::Worker)), m)
+        })
+    } else {
+        (one(true, 1), one(false, 1))
+    };
+    let (female, estimate, other_cost) = match (women, men) {
+        (Ok(w), Ok(m)) if w.cost <= m.cost => (true, w, m.cost),
+        (Ok(w), Ok(m)) => (false, m, w.cost),
+        (Ok(w), Err(_)) => (true, w, f64::INFINITY),
+        (Err(_), Ok(m)) => (false, m, f64::INFINITY),
+        (Err(e), Err(_)) => return Err(e),
+    };
+    Ok(PersonMeasurement {
+        female,
+        estimate,
+        other_cost,
+    })
+}

@@ -1,0 +1,344 @@
+//! The body the fit moves: a MakeHuman shape (the sliders of [`fitroom_body::fit::Param`], the
+//! same ones the fit to typed-in measurements uses), posed by the rig's local rotations and
+//! placed in sensor space by a rotation about its pelvis and the pelvis' position; and how its
+//! skin moves with each slider.
+
+use fitroom_body::fit::{Param, REGIONS, SLIDERS};
+use fitroom_body::{BodyModel, RestPose, Shape, ShapeError, forward_kinematics, skin_positions};
+use glam::{Quat, Vec3};
+
+use fitroom_sensor::KinectJoint;
+use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
+
+use crate::MeasureError;
+
+/// The sliders the fit moves and the rest of the shape (age, ethnicity), which it does not.
+#[derive(Clone, Debug)]
+pub struct ShapeSpace {
+    pub params: Vec<Param>,
+    pub base: Shape,
+}
+
+impl ShapeSpace {
+    /// Gender, the four other macros, the `measure-*` sliders and the region scales: every
+    /// slider the fit to measurements may use, and gender (the camera does not know it).
+    pub fn full() -> Self {
+        let mut params = vec![
+            Param::Gender,
+            Param::Height,
+            Param::Weight,
+            Param::Muscle,
+            Param::Proportions,
+        ];
+        params.extend(SLIDERS.iter().map(|&s| Param::Slider(s)));
+        params.extend(REGIONS.iter().map(|&s| Param::Region(s)));
+        Self {
+            params,
+            base: Shape::default(),
+        }
+    }
+
+    pub fn len(&self) -> usize {
+        self.params.len()
+    }
+
+    pub fn is_empty(&self) -> bool {
+        self.params.is_empty()
+    }
+
+    /// The shape of slider values `x` (parallel to [`Self::params`]).
+    pub fn shape(&self, x: &[f32]) -> Shape {
+        let mut shape = self.base.clone();
+        for (p, &v) in self.params.iter().zip(x) {
+            p.set(&mut shape, v);
+        }
+        shape
+    }
+
+    /// The slider values of `shape`.
+    pub fn values(&self, shape: &Shape) -> Vec<f32> {
+        self.params.iter().map(|p| p.get(shape)).collect()
+    }
+
+    /// Every slider at rest (MakeHuman's default body).
+    pub fn rest(&self) -> Vec<f32> {
+        self.params.iter().map(|p| p.rest()).collect()
+    }
+}
+
+/// Where the body stands: its rotation (model space to sensor space) and its pelvis (the
+/// root bone's head) in sensor space. Anchoring the pelvis keeps a change of shape from
+/// moving the whole body (a taller body grows up and down from the hips).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Placement {
+    pub rotation: Quat,
+    pub pelvis: Vec3,
+}
+
+impl Placement {
+    /// `by` rotated about the pelvis (sensor-space rotation vector, radians) and moved.
+    pub fn moved(&self, turn: Vec3, shift: Vec3) -> Self {
+        Self {
+            rotation: (Quat::from_scaled_axis(turn) * self.rotation).normalize(),
+            pelvis: self.pelvis + shift,
+        }
+    }
+}
+
+/// A shape, morphed and posed.
+#[derive(Clone, Debug)]
+pub struct PosedBody {
+    /// The target weights of the shape.
+    pub weights: Vec<(usize, f32)>,
+    /// The morphed mesh at rest (all vertices, helpers included), model space.
+    pub positions: Vec<Vec3>,
+    pub rest: RestPose,
+    /// The body's vertices posed, sensor space.
+    pub vertices: Vec<Vec3>,
+}
+
+/// Poses shapes of one model in one pose.
+#[derive(Clone, Debug)]
+pub struct Posing<'a> {
+    pub model: &'a BodyModel,
+    /// Per bone, its rotation from rest (as [`forward_kinematics`] takes them).
+    pub locals: Vec<Quat>,
+    root: usize,
+}
+
+/// Forward-difference steps of the sliders (the macros span 0..1, the others -1..1).
+fn step(p: Param) -> f32 {
+    match p {
+        Param::Slider(_) | Param::Region(_) => 0.05,
+        _ => 0.025,
+    }
+}
+
+impl<'a> Posing<'a> {
+    pub fn new(model: &'a BodyModel, locals: Vec<Quat>) -> Self {
+        // The pelvis (the tracker's root and the Kinect hip centre); the rig's first root
+        // bone (MakeHuman's game rig has one at the floor) if it has none.
+        let root = model
+            .bone_index("pelvis")
+            .or_else(|| model.bones.iter().position(|b| b.parent.is_none()))
+            .unwrap_or(0);
+        Self {
+            model,
+            locals,
+            root,
+        }
+    }
+
+    /// This pose with bone `bone` turned by `turn` (a rotation vector in model space, about
+    /// the bone's head) on top of its current turn.
+    pub fn turned(&self, rest: &RestPose, bone: usize, turn: Vec3) -> Vec<Quat> {
+        let mut locals = self.locals.clone();
+        if bone >= locals.len() {
+            return locals;
+        }
+        let globals = forward_kinematics(&self.model.bones, rest, &locals, Vec3::ZERO);
+        let g = globals[bone].rotation;
+        locals[bone] =
+            (locals[bone] * (g.inverse() * Quat::from_scaled_axis(turn) * g)).normalize();
+        locals
+    }
+
+    /// How the posed vertices of `body` move per radian of turn of each of `bones` about
+    /// each model axis (three columns per bone), by forward differences.
+    pub fn pose_jacobian(
+        &self,
+        body: &PosedBody,
+        placement: &Placement,
+        bones: &[usize],
+    ) -> Vec<Vec<Vec3>> {
+        const H: f32 = 0.01;
+        let mut out = Vec::with_capacity(bones.len() * 3);
+        for &b in bones {
+            for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
+                let turned = Posing {
+                    locals: self.turned(&body.rest, b, axis * H),
+                    ..self.clone()
+                };
+                let v = turned.place(&body.positions, &body.rest, placement);
+                out.push(
+                    v.iter()
+                        .zip(&body.vertices)
+                        .map(|(a, b)| (*a - *b) / H)
+                        .collect(),
+                );
+            }
+        }
+        out
+    }
+
+    /// `body` (its shape as it is) in this pose.
+    pub fn repose(&self, body: &PosedBody, placement: &Placement) -> PosedBody {
+        PosedBody {
+            vertices: self.place(&body.positions, &body.rest, placement),
+            ..body.clone()
+        }
+    }
+
+    /// The body vertices of the morphed mesh `positions` (model space, at rest) posed and
+    /// placed.
+    fn place(&self, positions: &[Vec3], rest: &RestPose, placement: &Placement) -> Vec<Vec3> {
+        let m = self.model;
+        let globals = forward_kinematics(&m.bones, rest, &self.locals, Vec3::ZERO);
+        let n = (m.body_vertex_count as usize).min(positions.len());
+        let skinned = skin_positions(
+            &positions[..n],
+            &m.skin_joints,
+            &m.skin_weights,
+            rest,
+            &globals,
+        );
+        let pelvis = globals
+            .get(self.root)
+            .map(|g| g.translation)
+            .unwrap_or(Vec3::ZERO);
+        skinned
+            .into_iter()
+            .map(|p| placement.pelvis + placement.rotation * (p - pelvis))
+            .collect()
+    }
+
+    /// The 20 Kinect joints of `body` (posed and placed as [`Self::body`] made it), sensor
+    /// space: the heads of the tracker's joint bones, the head joint above the skull's base.
+    pub fn kinect_joints(
+        &self,
+        body: &PosedBody,
+        placement: &Placement,
+    ) -> [Vec3; KinectJoint::COUNT] {
+        let m = self.model;
+        let globals = forward_kinematics(&m.bones, &body.rest, &self.locals, Vec3::ZERO);
+        let pelvis = globals
+            .get(self.root)
+            .map(|g| g.translation)
+            .unwrap_or(Vec3::ZERO);
+        let head = |name: &str| {
+            m.bone_index(name)
+                .and_then(|b| globals.get(b))
+                .map_or(pelvis, |g| g.translation)
+        };
+        let mut out = [Vec3::ZERO; KinectJoint::COUNT];
+        for (joint, bone) in JOINT_BONES {
+            let mut p = head(bone);
+            if joint == KinectJoint::Head {
+                p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
+            }
+            out[joint.index()] = placement.pelvis + placement.rotation * (p - pelvis);
+        }
+        out
+    }
+
+    /// `shape` morphed, posed and placed.
+    pub fn body(&self, shape: &Shape, placement: &Placement) -> Result<PosedBody, ShapeError> {
+        let weights = shape.target_weights(self.model)?;
+        let positions = self.model.apply_targets(&weights);
+        let rest = self.model.rest_pose(&positions);
+        let vertices = self.place(&positions, &rest, placement);
+        Ok(PosedBody {
+            weights,
+            positions,
+            rest,
+            vertices,
+        })
+    }
+
+    /// Target weights as one weight per target of the model.
+    pub fn dense_weights(&self, weights: &[(usize, f32)]) -> Vec<f32> {
+        let mut dense = vec![0.0f32; self.model.targets.len()];
+        for &(t, w) in weights {
+            if let Some(d) = dense.get_mut(t) {
+                *d += w;
+            }
+        }
+        dense
+    }
+
+    /// The morphed rest mesh `positions` (of the shape `x`, whose dense target weights are
+    /// `base`) with slider `k` stepped by its forward-difference step (inwards at its upper
+    /// bound), and the step taken.
+    pub fn stepped(
+        &self,
+        space: &ShapeSpace,
+        x: &[f32],
+        positions: &[Vec3],
+        base: &[f32],
+        k: usize,
+    ) -> Result<(Vec<Vec3>, f32), MeasureError> {
+        let p = space.params[k];
+        let (lo, hi) = p.bounds();
+        let h = step(p);
+        let h = if x[k] + h > hi && x[k] - h >= lo {
+            -h
+        } else {
+            h
+        };
+        let mut moved = x.to_vec();
+        moved[k] += h;
+        let weights = self.dense_weights(&space.shape(&moved).target_weights(self.model)?);
+        let change: Vec<(usize, f32)> = weights
+            .iter()
+            .zip(base)
+            .enumerate()
+            .filter(|(_, (a, b))| a != b)
+            .map(|(t, (a, b))| (t, a - b))
+            .collect();
+        let mut out = positions.to_vec();
+        self.model.add_targets(&mut out, &change);
+        Ok((out, h))
+    }
+
+    /// How the posed vertices of `body` (the shape of `x`) move per unit of each slider of
+    /// `space`: one column of per-vertex derivatives per slider, by forward differences
+    /// (exact for the linear targets; the joints move with the mesh). Spread over `threads`.
+    pub fn shape_jacobian(
+        &self,
+        space: &ShapeSpace,
+        x: &[f32],
+        body: &PosedBody,
+        placement: &Placement,
+        threads: usize,
+    ) -> Result<Vec<Vec<Vec3>>, MeasureError> {
+        let base = self.dense_weights(&body.weights);
+        let column = |k: usize| -> Result<Vec<Vec3>, MeasureError> {
+            let (positions, h) = self.stepped(space, x, &body.positions, &base, k)?;
+            let rest = self.model.rest_pose(&positions);
+            let vertices = self.place(&positions, &rest, placement);
+            Ok(vertices
+                .iter()
+                .zip(&body.vertices)
+                .map(|(a, b)| (*a - *b) / h)
+                .collect())
+        };
+        let n = space.len();
+        let threads = threads.clamp(1, n.max(1));
+        let mut columns: Vec<Option<Result<Vec<Vec3>, MeasureError>>> =
+            (0..n).map(|_| None).collect();
+        std::thread::scope(|scope| {
+            let workers: Vec<_> = (0..threads)
+                .map(|t| {
+                    let column = &column;
+                    scope.spawn(move || {
+                        (t..n)
+                            .step_by(threads)
+                            .map(|k| (k, column(k)))
+                            .collect::<Vec<_>>()
+                    })
+                })
+                .collect();
+            for w in workers {
+                if let Ok(done) = w.join() {
+                    for (k, c) in done {
+                        columns[k] = Some(c);
+                    }
+                }
+            }
+        });
+        columns
+            .into_iter()
+            .map(|c| c.unwrap_or(Err(MeasureError::Worker)))
+            .collect()
+    }
+}

@@ -1,0 +1,264 @@
+//! Measuring people from depth on ANSUR II subjects the shape prior never saw, filmed by the
+//! synthetic Kinect v1 in the calibration pose: our fit against the filmed bodies' own
+//! measurements, beside the seed's method; and bad calibrations refused with a reason.
+
+use std::path::Path;
+use std::sync::Arc;
+
+use fitroom_body::ansur::{read_survey, sample};
+use fitroom_body::{BodyModel, Measure, SizeChart};
+use fitroom_depth::synthetic::NoiseSettings;
+use fitroom_depth::{DepthCamera, DepthFrame, PIXELS};
+use fitroom_measure::eval::{
+    MeasureReport, PoseSource, Stance, evaluate, held_out, record, training,
+};
+use fitroom_measure::{
+    AveragedView, CalibrationFrame, FitSettings, MeasureError, ShapePrior, fit_body, seed,
+};
+use glam::Vec3;
+
+fn root() -> std::path::PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../..")
+}
+
+fn model() -> BodyModel {
+    BodyModel::read(&root().join("assets/bodies/makehuman.fitbody")).expect("the shipped body")
+}
+
+fn chart(name: &str) -> SizeChart {
+    SizeChart::load(root().join("assets/sizecharts").join(name)).expect("a shipped chart")
+}
+
+/// `count` held-out subjects measured with the pose from `pose`.
+fn run(count: usize, seed: u64, pose: PoseSource) -> MeasureReport {
+    let model = model();
+    let [women, men] = read_survey(&fitroom_testdata::data_dir().join("ansur2")).expect("ANSUR II");
+    let all: Vec<_> = women.into_iter().chain(men).collect();
+    let subjects = sample(&held_out(&all), count, seed);
+    let prior = ShapePrior::shipped().expect("the shipped prior");
+    let (w, m) = (
+        chart("en13402-female-seed002.ron"),
+        chart("en13402-male-seed002.ron"),
+    );
+    let report = evaluate(
+        &model,
+        &subjects,
+        &prior,
+        (&w, &m),
+        &FitSettings::default(),
+        pose,
+        30,
+        seed,
+        2,
+        &|_, _| {},
+    );
+    for r in &report.results {
+        assert!(r.error.is_none(), "subject {}: {:?}", r.id, r.error);
+    }
+    report
+}
+
+fn stats(r: &MeasureReport, m: Measure) -> f64 {
+    r.ours
+        .iter()
+        .find(|s| s.measure == m)
+        .map(|s| s.mean_abs_cm)
+        .expect("evaluated")
+}
+
+fn seed_stats(r: &MeasureReport, m: Measure) -> f64 {
+    r.seed_method
+        .iter()
+        .find(|s| s.measure == m)
+        .map(|s| s.mean_abs_cm)
+        .expect("evaluated")
+}
+
+/// Prints each subject's errors and the summary.
+fn report(r: &MeasureReport) {
+    for s in &r.results {
+        println!(
+            "{} truth {:.2} ours {:.2} female {} at {:.2} m: stature {:+.2}, shoulder {:+.2}, bust {:+.2}, hip {:+.2} cm",
+            s.id,
+            s.truth[&Measure::Stature],
+            s.ours[&Measure::Stature],
+            s.female,
+            s.stance.distance_m,
+            s.ours[&Measure::Stature] - s.truth[&Measure::Stature],
+            s.ours[&Measure::ShoulderWidth] - s.truth[&Measure::ShoulderWidth],
+            s.ours[&Measure::Bust] - s.truth[&Measure::Bust],
+            s.ours[&Measure::Hip] - s.truth[&Measure::Hip]
+        );
+    }
+    println!(
+        "{}",
+        serde_json::to_string_pretty(&(&r.ours, &r.seed_method)).unwrap_or_default()
+    );
+    println!(
+        "stature {:.2} % (seed {:.2} %), sizes {:.1} %, genders {:.1} %, fit {:.0} ms mean",
+        r.stature_percent_ours,
+        r.stature_percent_seed,
+        r.size_agreement * 100.0,
+        r.gender_agreement * 100.0,
+        r.mean_fit_ms
+    );
+}
+
+/// The acceptance lines, on `r`.
+fn assert_goals(r: &MeasureReport, size_share: f64) {
+    report(r);
+    assert!(
+        r.stature_percent_ours <= 1.0,
+        "stature {:.2} %",
+        r.stature_percent_ours
+    );
+    let shoulder = stats(r, Measure::ShoulderWidth);
+    assert!(shoulder <= 1.5, "shoulder width {shoulder:.2} cm");
+    for m in [Measure::Bust, Measure::Waist, Measure::Hip] {
+        let e = stats(r, m);
+        assert!(e <= 2.0, "{m} {e:.2} cm");
+    }
+    assert!(
+        r.size_agreement >= size_share,
+        "recommended size equal to the true one for {:.1} %",
+        r.size_agreement * 100.0
+    );
+    assert!(stats(r, Measure::Stature) < seed_stats(r, Measure::Stature));
+    assert!(shoulder < seed_stats(r, Measure::ShoulderWidth));
+}
+
+/// A dozen subjects in the filmed pose (the measurement alone): the goals' error lines hold
+/// (the size share, a coarse figure on 12 people, is checked at 75 %; the 200-subject run
+/// below checks 90 %).
+#[test]
+fn held_out_subjects_are_measured_within_the_goals() {
+    let r = run(12, 3, PoseSource::Truth);
+    assert_goals(&r, 0.75);
+    assert!(
+        r.gender_agreement >= 0.9,
+        "genders {:.2}",
+        r.gender_agreement
+    );
+}
+
+/// Through the kiosk's chain (our tracker's pose, pixels and skeleton): within a few
+/// centimetres, and far better than the seed's method. (The goals are not met on this path
+/// yet: `docs/measure.md`.)
+#[test]
+fn held_out_subjects_through_the_tracker_are_measured_within_centimetres() {
+    let r = run(8, 4, PoseSource::Tracker);
+    report(&r);
+    assert!(
+        r.stature_percent_ours <= 1.5,
+        "stature {:.2} %",
+        r.stature_percent_ours
+    );
+    for m in [
+        Measure::ShoulderWidth,
+        Measure::Bust,
+        Measure::Waist,
+        Measure::Hip,
+    ] {
+        let e = stats(&r, m);
+        assert!(e <= 3.5, "{m} {e:.2} cm");
+    }
+    assert!(stats(&r, Measure::Stature) < seed_stats(&r, Measure::Stature));
+}
+
+/// The acceptance run: 200 held-out subjects (fixed seed), the filmed pose. About four
+/// minutes on two cores: `cargo test --release -p fitroom_measure --no-default-features
+/// --test measure -- --ignored`.
+#[test]
+#[ignore]
+fn two_hundred_subjects_meet_the_acceptance_lines() {
+    let r = run(200, 1, PoseSource::Truth);
+    assert_goals(&r, 0.90);
+}
+
+/// The prior and the evaluation never share a subject.
+#[test]
+fn the_prior_learns_from_other_subjects_than_the_evaluation_measures() {
+    let [women, men] = read_survey(&fitroom_testdata::data_dir().join("ansur2")).expect("ANSUR II");
+    let all: Vec<_> = women.into_iter().chain(men).collect();
+    let train: std::collections::HashSet<String> =
+        training(&all).into_iter().map(|s| s.id).collect();
+    let test = held_out(&all);
+    assert!(test.len() > 3000);
+    assert!(test.iter().all(|s| !train.contains(&s.id)));
+}
+
+fn still_frames(
+    count: usize,
+) -> (
+    BodyModel,
+    Vec<CalibrationFrame>,
+    fitroom_measure::eval::Recording,
+) {
+    let model = model();
+    let shape = fitroom_body::Shape::default();
+    let rec = record(
+        &model,
+        &shape,
+        &Stance::drawn(5),
+        count,
+        NoiseSettings::default(),
+        5,
+    )
+    .expect("a recording");
+    (model, rec.frames.clone(), rec)
+}
+
+#[test]
+fn too_few_frames_are_refused() {
+    let (_, frames, _) = still_frames(3);
+    assert!(matches!(
+        AveragedView::new(&frames),
+        Err(MeasureError::TooFewFrames { got: 3, .. })
+    ));
+    assert!(matches!(
+        seed::measure(&frames),
+        Err(MeasureError::TooFewFrames { .. })
+    ));
+}
+
+#[test]
+fn a_frame_of_the_wrong_size_or_with_nan_joints_is_named() {
+    let (_, mut frames, _) = still_frames(6);
+    frames[2].mask = vec![true; 100].into();
+    let e = AveragedView::new(&frames).expect_err("refused");
+    assert!(e.to_string().contains("frame 2"), "{e}");
+    let (_, mut frames, _) = still_frames(6);
+    frames[4].joints[3] = Vec3::NAN;
+    let e = AveragedView::new(&frames).expect_err("refused");
+    assert!(e.to_string().contains("frame 4"), "{e}");
+}
+
+/// Frames without depth (a sensor that shows nothing) give an error, not a body.
+#[test]
+fn frames_without_depth_are_refused() {
+    let (model, mut frames, rec) = still_frames(6);
+    for f in &mut frames {
+        f.depth = DepthFrame {
+            depth_mm: Arc::from(vec![0u16; PIXELS]),
+            raw: None,
+            rgb: None,
+            time_s: 0.0,
+            timestamp: 0,
+            camera: DepthCamera::default(),
+        };
+    }
+    let view = AveragedView::new(&frames).expect("averaged");
+    let prior = ShapePrior::shipped().expect("the shipped prior");
+    let e = fit_body(
+        &model,
+        &view,
+        &rec.locals,
+        rec.placement,
+        &fitroom_body::Shape::default(),
+        Some(prior.of(true)),
+        &FitSettings::default(),
+    )
+    .expect_err("no body from no depth");
+    assert!(matches!(e, MeasureError::TooFewPoints { .. }), "{e}");
+    assert!(seed::measure(&frames).is_err());
+}

@@ -1,0 +1,204 @@
+//! The measurement in an app: depth frames of a filmed calibration go through the tracker
+//! plugin into the measurement plugin, which measures the person off the main schedule and
+//! reshapes the avatar; bad calibrations (two people, a person who walks away) publish
+//! nothing and say why.
+
+use std::path::Path;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use bevy::prelude::*;
+use fitroom_body::plugin::{AvatarBody, AvatarShape};
+use fitroom_body::{BodyModel, Shape};
+use fitroom_depth::DepthFrame;
+use fitroom_depth::plugin::DepthFeed;
+use fitroom_depth::synthetic::NoiseSettings;
+use fitroom_measure::eval::{Recording, Stance, record};
+use fitroom_measure::plugin::{BodyMeasurements, Calibration, CalibrationStatus, MeasurePlugin};
+use fitroom_sensor::plugin::SensorFeed;
+use fitroom_tracker::plugin::TrackerPlugin;
+
+fn model() -> BodyModel {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
+    BodyModel::read(&path).expect("the shipped body")
+}
+
+fn app(model: &BodyModel) -> App {
+    let mut app = App::new();
+    app.add_plugins(MinimalPlugins)
+        .insert_resource(AvatarBody::unshaped(Arc::new(model.clone())))
+        .init_resource::<AvatarShape>()
+        .init_resource::<SensorFeed>()
+        .init_resource::<DepthFeed>()
+        .add_plugins((TrackerPlugin, MeasurePlugin));
+    app.world_mut().resource_mut::<Calibration>().start();
+    app
+}
+
+fn feed(app: &mut App, frame: &DepthFrame) {
+    {
+        let mut depth = app.world_mut().resource_mut::<DepthFeed>();
+        depth.latest = Some(frame.clone());
+        depth.frames_received += 1;
+    }
+    app.update();
+}
+
+/// Updates until the fit under way ends (at most 30 s).
+fn settle(app: &mut App) {
+    let began = Instant::now();
+    while app.world().resource::<Calibration>().status == CalibrationStatus::Fitting {
+        assert!(
+            began.elapsed() < Duration::from_secs(30),
+            "the fit never ended"
+        );
+        std::thread::sleep(Duration::from_millis(20));
+        app.update();
+    }
+}
+
+fn hint(app: &App) -> Option<String> {
+    match &app.world().resource::<Calibration>().status {
+        CalibrationStatus::Collecting { hint, .. } => hint.clone(),
+        _ => None,
+    }
+}
+
+fn filmed(model: &BodyModel, shape: &Shape, stance: Stance, seed: u64) -> Recording {
+    record(model, shape, &stance, 40, NoiseSettings::default(), seed).expect("a recording")
+}
+
+/// A broad man stands still: measured, the avatar takes his shape, his size is near.
+#[test]
+fn a_person_standing_still_is_measured_and_the_avatar_takes_their_shape() {
+    let model = model();
+    let man = Shape {
+        gender: 1.0,
+        weight: 0.8,
+        height: 0.7,
+        ..Shape::default()
+    };
+    let rec = filmed(&model, &man, Stance::drawn(11), 11);
+    let truth = model.measure(&rec.body.positions).expect("measurable");
+    let mut app = app(&model);
+    for f in &rec.frames {
+        feed(&mut app, &f.depth);
+        settle(&mut app);
+        if app.world().contains_resource::<BodyMeasurements>() {
+            break;
+        }
+    }
+    let measured = app
+        .world()
+        .get_resource::<BodyMeasurements>()
+        .expect("measured within the recording");
+    let m = &measured.measurements;
+    println!(
+        "stature {:.1} / {:.1}, chest {:.1} / {:.1}, waist {:.1} / {:.1}, hip {:.1} / {:.1} cm; {:.0} ms after the last frame",
+        m.stature_cm,
+        truth.stature_cm,
+        m.bust_cm,
+        truth.bust_cm,
+        m.waist_cm,
+        truth.waist_cm,
+        m.hip_cm,
+        truth.hip_cm,
+        measured.latency_ms
+    );
+    assert!((m.stature_cm - truth.stature_cm).abs() < 2.5);
+    assert!((m.bust_cm - truth.bust_cm).abs() < 4.0);
+    assert!(!measured.female, "a man's prior explains him better");
+    assert_eq!(measured.frames, 30);
+    assert!(
+        measured
+            .uncertainty_cm
+            .iter()
+            .all(|(_, s)| s.is_finite() && *s > 0.0)
+    );
+    assert_eq!(app.world().resource::<AvatarShape>().0, measured.shape);
+    assert_eq!(
+        app.world().resource::<Calibration>().status,
+        CalibrationStatus::Done
+    );
+}
+
+/// Two people in view: nothing is measured, and the kiosk is told why.
+#[test]
+fn two_people_in_view_are_not_measured() {
+    let model = model();
+    let mut left = Stance::drawn(3);
+    left.offset_m = -0.45;
+    let mut right = Stance::drawn(4);
+    right.offset_m = 0.5;
+    right.distance_m = left.distance_m + 0.1;
+    let a = filmed(&model, &Shape::default(), left, 3);
+    let b = filmed(
+        &model,
+        &Shape {
+            gender: 0.0,
+            ..Shape::default()
+        },
+        right,
+        4,
+    );
+    let mut app = app(&model);
+    let mut hints = Vec::new();
+    for (fa, fb) in a.frames.iter().zip(&b.frames) {
+        // Both people in one frame: the nearer reading of the two films.
+        let both: Vec<u16> = fa
+            .depth
+            .depth_mm
+            .iter()
+            .zip(fb.depth.depth_mm.iter())
+            .map(|(&x, &y)| match (x, y) {
+                (0, v) | (v, 0) => v,
+                (x, y) => x.min(y),
+            })
+            .collect();
+        let frame = DepthFrame {
+            depth_mm: both.into(),
+            raw: None,
+            ..fa.depth.clone()
+        };
+        feed(&mut app, &frame);
+        settle(&mut app);
+        hints.extend(hint(&app));
+    }
+    assert!(!app.world().contains_resource::<BodyMeasurements>());
+    assert!(
+        hints.iter().any(|h| h.contains("Two people")),
+        "hints: {hints:?}"
+    );
+}
+
+/// The person walks away half-way through: no measurement from the frames before; when
+/// they are back and still, they are measured.
+#[test]
+fn a_calibration_interrupted_by_leaving_starts_again() {
+    let model = model();
+    let rec = filmed(&model, &Shape::default(), Stance::drawn(8), 8);
+    let empty = {
+        let mut room = Stance::drawn(8);
+        room.offset_m = 6.0; // out of the camera's view
+        filmed(&model, &Shape::default(), room, 9)
+    };
+    let mut app = app(&model);
+    for f in &rec.frames[..20] {
+        feed(&mut app, &f.depth);
+    }
+    for f in &empty.frames[..10] {
+        feed(&mut app, &f.depth);
+        settle(&mut app);
+    }
+    assert!(!app.world().contains_resource::<BodyMeasurements>());
+    let h = hint(&app).expect("a hint while nobody is there");
+    assert!(h.contains("Step in front"), "{h}");
+    for f in rec.frames.iter().chain(&rec.frames) {
+        feed(&mut app, &f.depth);
+        settle(&mut app);
+        if app.world().contains_resource::<BodyMeasurements>() {
+            break;
+        }
+    }
+    assert!(app.world().contains_resource::<BodyMeasurements>());
+}
