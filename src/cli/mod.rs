@@ -14,6 +14,7 @@ pub mod app;
 pub mod body;
 pub mod cloth;
 pub mod import;
+pub mod measure;
 pub mod motion;
 pub mod sensor;
 pub mod track;
@@ -69,6 +70,11 @@ pub enum Command {
         #[command(subcommand)]
         command: track::TrackCommand,
     },
+    /// Measuring the person from depth.
+    Measure {
+        #[command(subcommand)]
+        command: measure::MeasureCommand,
+    },
 }
 
 /// Runs a parsed command line (the kiosk when it names no command).
@@ -89,6 +95,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Body { command } => body::run(command),
         Command::Motion { command } => motion::run(command),
         Command::Track { command } => track::run(command),
+        Command::Measure { command } => measure::run(command),
     }
 }
 

@@ -1,0 +1,250 @@
+//! `fitroom measure`: measuring people from depth. `prior` learns the shape prior from ANSUR
+//! II, `eval` measures ANSUR II subjects filmed by the synthetic Kinect with both methods.
+
+use std::fmt::Write as _;
+use std::path::PathBuf;
+
+use anyhow::{Context, Result, bail};
+use clap::Subcommand;
+use fitroom_body::SizeChart;
+use fitroom_body::ansur::{read_survey, sample};
+use fitroom_measure::eval::{MeasureReport, PoseSource, evaluate, held_out, training};
+use fitroom_measure::prior::learn;
+use fitroom_measure::{FitSettings, ShapePrior};
+
+use crate::cli::BodyArg;
+
+#[derive(Subcommand)]
+pub enum MeasureCommand {
+    /// Learn the shape prior (how the body's sliders go together in people) from ANSUR II
+    /// subjects the evaluation never uses (even positions of each survey file).
+    Prior(PriorArgs),
+    /// Measure ANSUR II subjects (odd positions: the prior never saw them) filmed in the
+    /// calibration pose by the synthetic Kinect v1, with the seed's method and ours, against
+    /// the filmed bodies' own measurements.
+    Eval(EvalArgs),
+}
+
+#[derive(clap::Args)]
+pub struct SurveyArgs {
+    /// The folder with the ANSUR II files (default: the repository's `data/ansur2`).
+    #[arg(long, default_value = concat!(env!("CARGO_MANIFEST_DIR"), "/data/ansur2"))]
+    pub data: PathBuf,
+    /// Subjects (a seeded random sample of the half the command uses).
+    #[arg(long)]
+    pub subjects: Option<usize>,
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    #[arg(long, default_value_t = 2)]
+    pub threads: usize,
+    #[command(flatten)]
+    pub body: BodyArg,
+}
+
+#[derive(clap::Args)]
+pub struct PriorArgs {
+    #[command(flatten)]
+    pub survey: SurveyArgs,
+    /// Where to write the prior (default: the assets' bodies/shape-prior.ron).
+    #[arg(long)]
+    pub out: Option<PathBuf>,
+}
+
+#[derive(clap::Args)]
+pub struct EvalArgs {
+    #[command(flatten)]
+    pub survey: SurveyArgs,
+    /// Where the pose and the person's pixels come from: `tracker` (our tracker on the
+    /// frames, as in the kiosk) or `truth` (the filmed pose: the measurement alone).
+    #[arg(long, value_enum, default_value = "tracker")]
+    pub pose: PoseArg,
+    /// Calibration frames per subject (30: one second).
+    #[arg(long, default_value_t = 30)]
+    pub frames: usize,
+    /// Print the report as JSON (every subject) instead of the summary.
+    #[arg(long)]
+    pub json: bool,
+    /// Write the JSON report here.
+    #[arg(long)]
+    pub report: Option<PathBuf>,
+    /// Write the summary (Markdown) here.
+    #[arg(long)]
+    pub summary: Option<PathBuf>,
+}
+
+#[derive(Clone, Copy, clap::ValueEnum)]
+pub enum PoseArg {
+    Tracker,
+    Truth,
+}
+
+pub fn run(command: MeasureCommand) -> Result<()> {
+    match command {
+        MeasureCommand::Prior(args) => prior(args),
+        MeasureCommand::Eval(args) => eval(args),
+    }
+}
+
+fn bar(total: usize, what: &str) -> indicatif::ProgressBar {
+    let bar = indicatif::ProgressBar::new(total as u64);
+    bar.set_style(
+        indicatif::ProgressStyle::with_template(&format!(
+            "{{elapsed_precise}} [{{bar:40}}] {{pos}}/{{len}} {what} (eta {{eta}})"
+        ))
+        .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
+    );
+    bar
+}
+
+/// Both survey files, women then men, as one list (each file's own order kept).
+fn survey(data: &std::path::Path) -> Result<Vec<fitroom_body::ansur::AnsurSubject>> {
+    let [women, men] = read_survey(data)
+        .with_context(|| format!("cannot read the ANSUR II survey in '{}'", data.display()))?;
+    Ok(women.into_iter().chain(men).collect())
+}
+
+fn prior(args: PriorArgs) -> Result<()> {
+    let s = &args.survey;
+    let model = s.body.load()?;
+    let all = survey(&s.data)?;
+    let pool = training(&all);
+    let subjects = match s.subjects {
+        Some(n) => sample(&pool, n, s.seed),
+        None => pool,
+    };
+    let progress = bar(subjects.len(), "subjects fitted");
+    let prior = learn(&model, &subjects, s.threads, &|_, _| progress.inc(1))?;
+    progress.finish_and_clear();
+    let out = match args.out {
+        Some(p) => p,
+        None => crate::assets::assets_dir()?.join("bodies/shape-prior.ron"),
+    };
+    let text = format!(
+        "// The shape prior: mean and covariance of the body's sliders over people, per gender.\n\
+         // Made by `fitroom measure prior` (do not edit by hand). {}\n{}\n",
+        prior.source,
+        ron::ser::to_string_pretty(&prior, ron::ser::PrettyConfig::default())?
+    );
+    std::fs::write(&out, text).with_context(|| format!("cannot write '{}'", out.display()))?;
+    println!(
+        "shape prior from {} women and {} men written to {}",
+        prior.female.subjects,
+        prior.male.subjects,
+        out.display()
+    );
+    Ok(())
+}
+
+fn chart(name: &str) -> Result<SizeChart> {
+    let path = crate::assets::assets_dir()?.join("sizecharts").join(name);
+    SizeChart::load(&path)
+        .with_context(|| format!("cannot read the size chart '{}'", path.display()))
+}
+
+fn eval(args: EvalArgs) -> Result<()> {
+    let s = &args.survey;
+    if args.frames < fitroom_measure::MIN_FRAMES {
+        bail!(
+            "--frames {} is too few: a calibration needs at least {}",
+            args.frames,
+            fitroom_measure::MIN_FRAMES
+        );
+    }
+    let model = s.body.load()?;
+    let prior = ShapePrior::shipped()?;
+    let all = survey(&s.data)?;
+    let pool = held_out(&all);
+    let subjects = sample(&pool, s.subjects.unwrap_or(200), s.seed);
+    let (women, men) = (
+        chart("en13402-female-seed002.ron")?,
+        chart("en13402-male-seed002.ron")?,
+    );
+    let progress = bar(subjects.len(), "subjects measured");
+    let report = evaluate(
+        &model,
+        &subjects,
+        &prior,
+        (&women, &men),
+        &FitSettings::default(),
+        match args.pose {
+            PoseArg::Tracker => PoseSource::Tracker,
+            PoseArg::Truth => PoseSource::Truth,
+        },
+        args.frames,
+        s.seed,
+        s.threads,
+        &|_, _| progress.inc(1),
+    );
+    progress.finish_and_clear();
+    let json = serde_json::to_string_pretty(&report)?;
+    if let Some(path) = &args.report {
+        std::fs::write(path, &json)
+            .with_context(|| format!("cannot write '{}'", path.display()))?;
+    }
+    let md = markdown(&report);
+    if let Some(path) = &args.summary {
+        std::fs::write(path, &md).with_context(|| format!("cannot write '{}'", path.display()))?;
+    }
+    if args.json {
+        println!("{json}");
+    } else {
+        print!("{md}");
+    }
+    Ok(())
+}
+
+/// The report's summary as Markdown.
+pub fn markdown(r: &MeasureReport) -> String {
+    let mut md = String::new();
+    let _ = writeln!(
+        md,
+        "{} ANSUR II subjects (held out from the prior; seed {}), {} calibration frames each, pose from {}; {} failed.\n",
+        r.subjects, r.seed, r.frames, r.pose, r.failed
+    );
+    let _ = writeln!(
+        md,
+        "| measure | ours: mean abs | bias | p95 | max | seed's method: mean abs | bias | p95 | seed, depth map alone: mean abs | bias |"
+    );
+    let _ = writeln!(
+        md,
+        "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+    );
+    for m in &r.ours {
+        let find = |v: &[fitroom_measure::eval::MeasureStats]| {
+            v.iter()
+                .find(|s| s.measure == m.measure)
+                .map_or(" | |".to_string(), |s| {
+                    format!("{:.2} cm | {:+.2}", s.mean_abs_cm, s.bias_cm)
+                })
+        };
+        let p95 = r
+            .seed_method
+            .iter()
+            .find(|s| s.measure == m.measure)
+            .map_or(String::new(), |s| format!("{:.2}", s.p95_abs_cm));
+        let _ = writeln!(
+            md,
+            "| {} | {:.2} cm | {:+.2} | {:.2} | {:.2} | {} | {} | {} |",
+            m.measure,
+            m.mean_abs_cm,
+            m.bias_cm,
+            m.p95_abs_cm,
+            m.max_abs_cm,
+            find(&r.seed_method),
+            p95,
+            find(&r.seed_map_only)
+        );
+    }
+    let _ = writeln!(
+        md,
+        "\nStature, mean absolute error: ours {:.2} %, the seed's {:.2} % (its depth map alone {:.2} %). Recommended size (EN 13402, the subject's gender) equal to the true one: {:.1} %. Gender found: {:.1} %. Fit time (averaged frames to measured body, one core per subject): mean {:.0} ms, max {:.0} ms.",
+        r.stature_percent_ours,
+        r.stature_percent_seed,
+        r.stature_percent_seed_map,
+        r.size_agreement * 100.0,
+        r.gender_agreement * 100.0,
+        r.mean_fit_ms,
+        r.max_fit_ms
+    );
+    md
+}
