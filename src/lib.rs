@@ -347,6 +347,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
                 source_name: options.sensor.name(),
             },
             fitroom_tracker::plugin::TrackerPlugin,
+            fitroom_measure::plugin::MeasurePlugin,
         ))
         .add_plugins(fitroom_body::reload::BodyFilePlugin {
             file: options.body.clone(),

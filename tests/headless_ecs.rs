@@ -133,17 +133,28 @@ fn avatar_root_travels_the_clips_path_through_depth_and_the_tracker() {
     );
 }
 
-/// The kiosk with the shipped default (the performer on a treadmill): a person is found,
-/// calibrated and tried on, and the avatar walks on the spot where the performer is.
+/// The kiosk with the shipped default (the performer on a treadmill): a person is found and
+/// tried on, and the avatar walks on the spot where the performer is. The performer never
+/// stands still, so they are not measured (no measurement from a walking person: the kiosk
+/// says so) and the kiosk goes on unmeasured after `measure_s` (1 s here, 8 s shipped).
 #[test]
 fn the_shipped_default_tracks_the_performer_into_try_on() {
-    let options = AppOptions::with_defaults(Mode::Headless { render: false })
-        .expect("the shipped assets read");
+    let (config, _) = common::kiosk_config_copy("walker", &[("measure_s: 8.0", "measure_s: 1.0")]);
+    let options =
+        AppOptions::with_config(Mode::Headless { render: false }, &config).expect("it reads");
     assert!(options.treadmill);
     let mut app = headless::headless_app(&options).expect("the app builds");
     let mut states = Vec::new();
+    let mut hints = std::collections::BTreeSet::new();
     for _ in 0..200 {
         app.update();
+        if let fitroom_measure::plugin::CalibrationStatus::Collecting { hint: Some(h), .. } = &app
+            .world()
+            .resource::<fitroom_measure::plugin::Calibration>()
+            .status
+        {
+            hints.insert(h.clone());
+        }
         let state = *app
             .world()
             .resource::<bevy::prelude::State<fitroom::kiosk::KioskState>>()
@@ -162,6 +173,15 @@ fn the_shipped_default_tracks_the_performer_into_try_on() {
         .world()
         .resource::<fitroom_tracker::plugin::TrackedSkeleton>();
     assert_eq!(tracked.starts, 1, "tracked from one start");
+    assert!(
+        !app.world()
+            .contains_resource::<fitroom_measure::plugin::BodyMeasurements>(),
+        "a walking person is not measured"
+    );
+    assert!(
+        hints.iter().any(|h| h.contains("stand still")),
+        "the kiosk asked them to stand still: {hints:?}"
+    );
 }
 
 /// The person walks towards the camera and past it (no treadmill), out of its view: the kiosk
@@ -171,16 +191,7 @@ fn the_shipped_default_tracks_the_performer_into_try_on() {
 fn the_kiosk_returns_to_attract_when_the_person_leaves_and_tracks_them_again() {
     use fitroom::kiosk::KioskState::{self, *};
     // The person is out of view about 1 s of each pass: Attract after half a second.
-    let scratch = std::env::temp_dir().join(format!("fitroom-leave-{}", std::process::id()));
-    std::fs::create_dir_all(&scratch).expect("scratch folder");
-    let config = scratch.join("kiosk.ron");
-    let shipped = fitroom::assets::assets_dir()
-        .expect("assets")
-        .join("kiosk.ron");
-    let text = std::fs::read_to_string(shipped).expect("the shipped configuration");
-    let edited = text.replacen("lost_s: 3.0", "lost_s: 0.5", 1);
-    assert_ne!(edited, text);
-    std::fs::write(&config, edited).expect("write");
+    let (config, _) = common::kiosk_config_copy("leave", &[("lost_s: 3.0", "lost_s: 0.5")]);
     let mut options =
         AppOptions::with_config(Mode::Headless { render: false }, &config).expect("it reads");
     options.treadmill = false;

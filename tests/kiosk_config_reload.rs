@@ -3,6 +3,8 @@
 //! the file, the line and the field. The whole app, headless, on a scratch copy of the
 //! shipped `assets/kiosk.ron`.
 
+mod common;
+
 use std::time::{Duration, Instant};
 
 use fitroom::kiosk::KioskTimings;
@@ -31,15 +33,7 @@ fn config_error(app: &bevy::app::App) -> Option<String> {
 
 #[test]
 fn an_edited_configuration_takes_effect_and_a_broken_one_is_kept_out() {
-    let scratch = std::env::temp_dir().join(format!("fitroom-config-{}", std::process::id()));
-    let _ = std::fs::remove_dir_all(&scratch);
-    std::fs::create_dir_all(&scratch).expect("scratch folder");
-    let config = scratch.join("kiosk.ron");
-    let shipped = fitroom::assets::assets_dir()
-        .expect("assets")
-        .join("kiosk.ron");
-    let text = std::fs::read_to_string(shipped).expect("the shipped configuration");
-    std::fs::write(&config, &text).expect("write");
+    let (config, text) = common::kiosk_config_copy("config", &[]);
 
     let options =
         AppOptions::with_config(Mode::Headless { render: false }, &config).expect("it reads");
@@ -75,5 +69,7 @@ fn an_edited_configuration_takes_effect_and_a_broken_one_is_kept_out() {
         "{error}"
     );
     assert_eq!(timings(&app).lost_s, 7.5, "the last good timings stay");
-    let _ = std::fs::remove_dir_all(&scratch);
+    if let Some(scratch) = config.parent() {
+        let _ = std::fs::remove_dir_all(scratch);
+    }
 }

@@ -74,6 +74,14 @@ pub struct TimingsConfig {
     pub calibrate_s: f32,
     /// Seconds without a tracked person before going back to `Attract` (0.1-600).
     pub lost_s: f32,
+    /// Seconds `Calibrate` tries to measure the person (from depth) before going on to
+    /// `TryOn` unmeasured (1-600; default 8).
+    #[serde(default = "default_measure_s")]
+    pub measure_s: f32,
+}
+
+fn default_measure_s() -> f32 {
+    8.0
 }
 
 /// One garment offered.
@@ -168,6 +176,13 @@ impl KioskConfig {
                 format!("is {} s; accepted 0.1..=600 s", t.lost_s),
             ));
         }
+        if !(1.0..=600.0).contains(&t.measure_s) {
+            return Err(invalid(
+                "measure_s",
+                "timings.measure_s",
+                format!("is {} s; accepted 1..=600 s", t.measure_s),
+            ));
+        }
         let d = config.display;
         for (name, value) in [("width", d.width), ("height", d.height)] {
             if !(240..=16_384).contains(&value) {
@@ -213,6 +228,7 @@ impl KioskConfig {
         KioskTimings {
             calibrate_s: self.timings.calibrate_s,
             lost_s: self.timings.lost_s,
+            measure_s: self.timings.measure_s,
         }
     }
 }

@@ -37,6 +37,8 @@ pub struct KioskTimings {
     pub calibrate_s: f32,
     /// Seconds without a tracked person before going back to `Attract`.
     pub lost_s: f32,
+    /// Seconds `Calibrate` tries to measure the person before going on unmeasured.
+    pub measure_s: f32,
 }
 
 impl Default for KioskTimings {
@@ -44,6 +46,7 @@ impl Default for KioskTimings {
         Self {
             calibrate_s: 2.0,
             lost_s: 3.0,
+            measure_s: 8.0,
         }
     }
 }
@@ -184,6 +187,7 @@ impl Plugin for KioskPlugin {
                         .in_set(KioskSystems::Flow),
                 ),
             );
+        measure::add(app);
         if app.is_plugin_added::<bevy::gizmos::GizmoPlugin>() {
             app.add_systems(Startup, skeletons_on_top)
                 .add_systems(PostUpdate, draw_debug_skeletons.in_set(KioskSystems::Debug));
@@ -223,11 +227,16 @@ fn kiosk_transitions(
     timings: Res<KioskTimings>,
     mut status: ResMut<KioskStatus>,
     mut motion: Option<ResMut<AvatarMotion>>,
+    measuring: measure::Measuring,
 ) {
     let person_present = status.untracked_s < timings.lost_s && status.tracked_s > 0.0;
+    // With depth, Calibrate waits for the measurement (or gives up on it after
+    // `measure_s`); with a skeleton only, there is nothing to measure.
+    let calibrated = status.tracked_s >= timings.calibrate_s
+        && (!measuring.possible() || measuring.done() || status.in_state_s >= timings.measure_s);
     let target = match state.get() {
         KioskState::Attract if person_present => Some(KioskState::Calibrate),
-        KioskState::Calibrate if status.tracked_s >= timings.calibrate_s => Some(KioskState::TryOn),
+        KioskState::Calibrate if calibrated => Some(KioskState::TryOn),
         KioskState::Calibrate | KioskState::TryOn if status.untracked_s >= timings.lost_s => {
             Some(KioskState::Attract)
         }
@@ -301,4 +310,5 @@ pub fn snap_camera(world: &mut World) {
 
 pub mod config;
 pub mod depth_view;
+pub mod measure;
 pub mod ui;

@@ -5,6 +5,7 @@ use bevy::diagnostic::{DiagnosticsStore, FrameTimeDiagnosticsPlugin};
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use fitroom_garment::plugin::GarmentStatus;
+use fitroom_measure::plugin::{BodyMeasurements, Calibration, CalibrationStatus};
 use fitroom_motion::plugin::AvatarMotion;
 use fitroom_sensor::plugin::SensorFeed;
 
@@ -35,7 +36,13 @@ fn status_overlay(
     config: Option<Res<super::config::ActiveKioskConfig>>,
     body_file: Option<Res<fitroom_body::reload::BodyFile>>,
     debug: Res<super::DebugSkeletons>,
+    measuring: (
+        Option<Res<Calibration>>,
+        Option<Res<BodyMeasurements>>,
+        Res<super::measure::SizeAdvice>,
+    ),
 ) -> Result {
+    let (calibration, measured, advice) = measuring;
     let fps = diagnostics
         .get(&FrameTimeDiagnosticsPlugin::FPS)
         .and_then(|d| d.smoothed())
@@ -76,7 +83,35 @@ fn status_overlay(
                     "D: show the sensor skeletons"
                 });
                 if *state.get() == KioskState::Calibrate {
-                    ui.label(format!("measuring… {:.1} s", status.tracked_s));
+                    match calibration.as_ref().map(|c| &c.status) {
+                        Some(CalibrationStatus::Collecting { frames, need, hint }) => {
+                            ui.add(
+                                egui::ProgressBar::new(*frames as f32 / (*need).max(1) as f32)
+                                    .text("measuring: stand still, arms a little away"),
+                            );
+                            if let Some(hint) = hint {
+                                ui.colored_label(egui::Color32::from_rgb(230, 160, 60), hint);
+                            }
+                        }
+                        Some(CalibrationStatus::Fitting) => {
+                            ui.label("measuring: fitting your body…");
+                        }
+                        _ => {
+                            ui.label(format!("tracking… {:.1} s", status.tracked_s));
+                        }
+                    }
+                }
+                if let Some(m) = measured.as_ref() {
+                    let v = &m.measurements;
+                    ui.label(format!(
+                        "measured: height {:.0} cm, chest {:.0}, waist {:.0}, hip {:.0} cm",
+                        v.stature_cm, v.bust_cm, v.waist_cm, v.hip_cm
+                    ));
+                    if let Some(size) = &advice.size {
+                        ui.label(format!("your size: {size} ({})", advice.reason));
+                    } else if !advice.reason.is_empty() {
+                        ui.label(advice.reason.clone());
+                    }
                 }
                 if let Some(error) = &feed.error {
                     ui.colored_label(egui::Color32::from_rgb(230, 80, 60), error);

@@ -30,3 +30,23 @@ pub fn clip_options(mode: Mode) -> AppOptions {
     options.treadmill = false;
     options
 }
+
+/// A copy of the shipped `assets/kiosk.ron` in a fresh scratch folder named after `name` and
+/// this process, each of `edits` (`(from, to)`) replaced once (each must be found): the
+/// copy's path and its text.
+pub fn kiosk_config_copy(name: &str, edits: &[(&str, &str)]) -> (PathBuf, String) {
+    let scratch = std::env::temp_dir().join(format!("fitroom-{name}-{}", std::process::id()));
+    let _ = std::fs::remove_dir_all(&scratch);
+    std::fs::create_dir_all(&scratch).expect("scratch folder");
+    let shipped = fitroom::assets::assets_dir()
+        .expect("assets")
+        .join("kiosk.ron");
+    let mut text = std::fs::read_to_string(shipped).expect("the shipped configuration");
+    for (from, to) in edits {
+        assert!(text.contains(from), "the shipped kiosk.ron has `{from}`");
+        text = text.replacen(from, to, 1);
+    }
+    let config = scratch.join("kiosk.ron");
+    std::fs::write(&config, &text).expect("write");
+    (config, text)
+}

@@ -1,0 +1,148 @@
+//! The kiosk's side of measuring the person (the work is `fitroom_measure::plugin`): measure
+//! when a person steps in (`Calibrate`), dress them in the recommended size of the garment
+//! worn once measured, and forget them when they leave (the next person starts from the
+//! configured body).
+
+use bevy::ecs::system::SystemParam;
+use bevy::prelude::*;
+use fitroom_body::plugin::AvatarShape;
+use fitroom_body::{Gender, Shape, SizeChart};
+use fitroom_depth::plugin::DepthFeed;
+use fitroom_garment::plugin::{GarmentRequest, GarmentStatus};
+use fitroom_garment::source::GarmentSource;
+use fitroom_measure::plugin::{BodyMeasurements, Calibration, CalibrationStatus, MeasurePrior};
+
+use super::KioskState;
+
+/// The configured body shape, which each new person starts from.
+#[derive(Resource, Debug, Clone, Default)]
+pub struct ConfiguredShape(pub Shape);
+
+/// The size recommended for the garment worn, and why.
+#[derive(Resource, Debug, Clone, Default, PartialEq)]
+pub struct SizeAdvice {
+    pub garment: Option<String>,
+    pub size: Option<String>,
+    pub reason: String,
+}
+
+/// Whether the person can be measured here, and whether they have been.
+#[derive(SystemParam)]
+pub struct Measuring<'w> {
+    calibration: Option<Res<'w, Calibration>>,
+    depth: Option<Res<'w, DepthFeed>>,
+    prior: Option<Res<'w, MeasurePrior>>,
+}
+
+impl Measuring<'_> {
+    /// Depth comes in and the measurement is available.
+    pub fn possible(&self) -> bool {
+        self.calibration.is_some()
+            && self.depth.as_ref().is_some_and(|d| d.frames_received > 0)
+            && self.prior.as_ref().is_some_and(|p| p.0.is_ok())
+    }
+
+    pub fn done(&self) -> bool {
+        self.calibration
+            .as_ref()
+            .is_some_and(|c| c.status == CalibrationStatus::Done)
+    }
+}
+
+pub fn add(app: &mut App) {
+    let configured = app
+        .world()
+        .get_resource::<AvatarShape>()
+        .map(|s| s.0.clone())
+        .unwrap_or_default();
+    app.insert_resource(ConfiguredShape(configured))
+        .init_resource::<SizeAdvice>()
+        .add_systems(OnEnter(KioskState::Calibrate), start)
+        .add_systems(OnEnter(KioskState::Attract), forget)
+        .add_systems(Update, size_garment);
+}
+
+fn start(calibration: Option<ResMut<Calibration>>) {
+    if let Some(mut c) = calibration {
+        c.start();
+    }
+}
+
+fn forget(
+    mut commands: Commands,
+    calibration: Option<ResMut<Calibration>>,
+    measured: Option<Res<BodyMeasurements>>,
+    configured: Res<ConfiguredShape>,
+    mut shape: ResMut<AvatarShape>,
+    mut advice: ResMut<SizeAdvice>,
+) {
+    if let Some(mut c) = calibration {
+        c.stop();
+    }
+    if measured.is_some() {
+        commands.remove_resource::<BodyMeasurements>();
+        shape.0 = configured.0.clone();
+        *advice = SizeAdvice::default();
+    }
+}
+
+/// Once measured (or when the garment changes), the garment's recommended size is worn.
+fn size_garment(
+    measured: Option<Res<BodyMeasurements>>,
+    status: Res<GarmentStatus>,
+    mut request: ResMut<GarmentRequest>,
+    mut advice: ResMut<SizeAdvice>,
+) {
+    let Some(measured) = measured else {
+        return;
+    };
+    let Some(file) = status.file.clone() else {
+        return;
+    };
+    let garment = file.display().to_string();
+    if !measured.is_changed() && advice.garment.as_deref() == Some(garment.as_str()) {
+        return;
+    }
+    advice.garment = Some(garment);
+    let (size, reason) = match recommend(&file, &measured) {
+        Ok(r) => r,
+        Err(why) => (None, why),
+    };
+    advice.size = size.clone();
+    advice.reason = reason;
+    if size.is_some() && request.size != size {
+        request.size = size;
+    }
+}
+
+/// The size of the garment in `file` for `measured`, and why.
+fn recommend(
+    file: &std::path::Path,
+    measured: &BodyMeasurements,
+) -> Result<(Option<String>, String), String> {
+    let source = GarmentSource::load(file).map_err(|e| e.to_string())?;
+    let Some(pattern) = source.pattern() else {
+        return Ok((None, "this garment comes in one size".into()));
+    };
+    let sizes: Vec<_> = pattern
+        .sizes
+        .iter()
+        .map(|s| (s.label.clone(), s.body_cm.clone()))
+        .collect();
+    if sizes.iter().all(|(_, m)| m.is_empty()) {
+        return Ok((
+            None,
+            "the garment's sizes state no body measurements".into(),
+        ));
+    }
+    let chart = SizeChart::from_nominal(&pattern.name, Gender::Unisex, &[], &sizes)
+        .map_err(|e| format!("the garment's sizes: {e}"))?;
+    let r = chart.recommend(&measured.measurements);
+    let reasons: Vec<String> = r
+        .measures
+        .iter()
+        .filter(|a| r.decided_by.contains(&a.measure))
+        .map(|a| a.reason.clone())
+        .collect();
+    Ok((r.size, reasons.join("; ")))
+}
