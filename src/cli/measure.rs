@@ -213,7 +213,7 @@ pub fn markdown(r: &MeasureReport) -> String {
         let find = |v: &[fitroom_measure::eval::MeasureStats]| {
             v.iter()
                 .find(|s| s.measure == m.measure)
-                .map_or(" | |".to_string(), |s| {
+                .map_or(" | ".to_string(), |s| {
                     format!("{:.2} cm | {:+.2}", s.mean_abs_cm, s.bias_cm)
                 })
         };
