@@ -101,6 +101,21 @@ fn status_overlay(
                         }
                     }
                 }
+                // In Try on unmeasured (the person never stood still in Calibrate): the
+                // measurement goes on, and says what it waits for.
+                if *state.get() == KioskState::TryOn
+                    && measured.is_none()
+                    && let Some(CalibrationStatus::Collecting { hint, .. }) =
+                        calibration.as_ref().map(|c| &c.status)
+                {
+                    ui.colored_label(
+                        egui::Color32::from_rgb(230, 160, 60),
+                        format!(
+                            "not measured yet{}: sizes are the middle ones",
+                            hint.as_ref().map_or(String::new(), |h| format!(" ({h})"))
+                        ),
+                    );
+                }
                 if let Some(m) = measured.as_ref() {
                     let v = &m.measurements;
                     ui.label(format!(
