@@ -256,56 +256,28 @@ pub fn evaluate(
     threads: usize,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> AnsurReport {
-    let next = AtomicUsize::new(0);
     let done = AtomicUsize::new(0);
-    let mut fits: Vec<Option<SubjectFit>> = vec![None; subjects.len()];
-    let results: Vec<Vec<(usize, SubjectFit)>> = std::thread::scope(|scope| {
-        let workers: Vec<_> = (0..threads.max(1))
-            .map(|_| {
-                scope.spawn(|| {
-                    let mut out = Vec::new();
-                    loop {
-                        let i = next.fetch_add(1, Ordering::Relaxed);
-                        let Some(s) = subjects.get(i) else {
-                            break;
-                        };
-                        let request = FitRequest {
-                            gender: if s.female { 0.0 } else { 1.0 },
-                            age_years: None,
-                            targets: s.measurements.clone(),
-                        };
-                        let fit = match fit(model, &request, options) {
-                            Ok(r) => subject_fit(s, &r),
-                            Err(e) => SubjectFit {
-                                id: s.id.clone(),
-                                female: s.female,
-                                residuals_cm: s
-                                    .measurements
-                                    .keys()
-                                    .map(|&m| (m, f32::NAN))
-                                    .collect(),
-                                reachable: false,
-                                at_bounds: Vec::new(),
-                                time_ms: 0.0,
-                                error: Some(e.to_string()),
-                            },
-                        };
-                        out.push((i, fit));
-                        progress(done.fetch_add(1, Ordering::Relaxed) + 1, subjects.len());
-                    }
-                    out
-                })
-            })
-            .collect();
-        workers
-            .into_iter()
-            .map(|w| w.join().unwrap_or_default())
-            .collect()
+    let fits = fitroom_math::parallel_map(subjects, threads, |s| {
+        let request = FitRequest {
+            gender: if s.female { 0.0 } else { 1.0 },
+            age_years: None,
+            targets: s.measurements.clone(),
+        };
+        let fit = match fit(model, &request, options) {
+            Ok(r) => subject_fit(s, &r),
+            Err(e) => SubjectFit {
+                id: s.id.clone(),
+                female: s.female,
+                residuals_cm: s.measurements.keys().map(|&m| (m, f32::NAN)).collect(),
+                reachable: false,
+                at_bounds: Vec::new(),
+                time_ms: 0.0,
+                error: Some(e.to_string()),
+            },
+        };
+        progress(done.fetch_add(1, Ordering::Relaxed) + 1, subjects.len());
+        fit
     });
-    for (i, f) in results.into_iter().flatten() {
-        fits[i] = Some(f);
-    }
-    let fits: Vec<SubjectFit> = fits.into_iter().flatten().collect();
     summarise(fits, options.tolerance_cm)
 }
 

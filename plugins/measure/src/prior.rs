@@ -129,7 +129,7 @@ pub fn learn(
     }
     let space = ShapeSpace::full();
     let done = std::sync::atomic::AtomicUsize::new(0);
-    let shapes = crate::eval::parallel_map(subjects, threads, |s| {
+    let shapes = fitroom_math::parallel_map(subjects, threads, |s| {
         let request = FitRequest {
             gender: if s.female { 0.0 } else { 1.0 },
             age_years: None,

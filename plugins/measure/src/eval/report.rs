@@ -8,7 +8,6 @@ use fitroom_body::{BodyModel, FitOptions, FitRequest, Measure, Measurements, Siz
 use fitroom_math::stats::percentile;
 use serde::Serialize;
 
-use super::parallel_map;
 use super::record::{Stance, record};
 use crate::fit::FitSettings;
 use crate::person::measure_person;
@@ -18,6 +17,7 @@ use crate::seed;
 use crate::tracked::{calibration_frame, tracked_pose};
 use crate::view::{AveragedView, CalibrationFrame};
 use fitroom_depth::synthetic::NoiseSettings;
+use fitroom_math::parallel_map;
 use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
 
 /// The measurements the evaluation reports (the list; both waists).
