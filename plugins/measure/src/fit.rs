@@ -134,8 +134,10 @@ const TILE: usize = 8;
 /// Points fewer than this cannot say much about a body.
 const MIN_POINTS: usize = 500;
 
-/// One residual's row: value, weight, and where it touches the body (vertex, direction).
+/// One residual's row: value, weight, and where it touches the body (vertex, direction);
+/// a surface point's or a silhouette vertex's.
 struct Row {
+    surface: bool,
     r: f32,
     w: f32,
     vertex: usize,
@@ -316,11 +318,7 @@ pub fn fit_body(
         Some(h) => uncertainty(&posing, &space, &x, &body, &probe, h, unknowns, mu)?,
         None => Vec::new(),
     };
-    let surface: Vec<f32> = rows
-        .iter()
-        .filter(|r| r.vertex < usize::MAX && r.w > 0.0)
-        .map(|r| r.r)
-        .collect();
+    let surface: Vec<f32> = rows.iter().filter(|r| r.surface).map(|r| r.r).collect();
     let rms_m = (surface.iter().map(|r| r * r).sum::<f32>() / surface.len().max(1) as f32).sqrt();
     Ok(BodyEstimate {
         shape,
@@ -501,6 +499,7 @@ impl Problem<'_> {
             let r = n.dot(p - body.vertices[i]);
             // The residual is the point minus the skin: moving the skin along n lowers it.
             rows.push(Row {
+                surface: true,
                 r: -r,
                 w: huber(r),
                 vertex: i,
@@ -530,6 +529,7 @@ impl Problem<'_> {
             let metres = (d - 1.0) * v.z / cam.fx;
             let dir = Vec3::new(-grad.x, -grad.y, 0.0).normalize_or_zero();
             rows.push(Row {
+                surface: false,
                 r: metres,
                 w: s.silhouette_weight * huber(metres),
                 vertex: j,

@@ -15,7 +15,6 @@ use fitroom_body::{Measure, Measurements, Shape};
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_depth::{HEIGHT, WIDTH};
 use fitroom_schedule::FitroomSystems;
-use fitroom_sensor::KinectJoint;
 use fitroom_tracker::plugin::{TrackedSkeleton, UserMap};
 
 use crate::MeasureError;
@@ -23,7 +22,7 @@ use crate::fit::FitSettings;
 use crate::person::{PersonMeasurement, measure_person};
 use crate::posed::Placement;
 use crate::prior::ShapePrior;
-use crate::tracked::calibration_frame;
+use crate::tracked::{calibration_frame, tracked_pose};
 use crate::view::{AveragedView, CalibrationFrame};
 
 /// Systems of the measurement plugin.
@@ -242,12 +241,7 @@ fn collect(
             return;
         }
     }
-    // The pose: the bones' turns, the body's rotation and its pelvis (the hip centre).
-    let placement = Placement {
-        rotation: tracked.pose.rotation,
-        pelvis: f.joints[KinectJoint::HipCenter.index()],
-    };
-    cal.pose = Some((tracked.pose.local.clone(), placement));
+    cal.pose = Some(tracked_pose(tracked));
     cal.frames.push(f);
     let (frames, need) = (cal.frames.len(), cal.need);
     cal.status = CalibrationStatus::Collecting {

@@ -12,10 +12,10 @@
 //! - Body height from the map: the user's topmost to lowest pixel. Head height: twice the
 //!   top of the head to the neck (the narrowest row of the user's pixels between the head
 //!   and shoulder-centre joints). Hip height: the hip-centre joint
-//!   above the lowest pixel. Elbow-fingertip and wrist-fingertip: the fingertip where the user's
+//!   above the lowest pixel. Elbow-fingertip: the fingertip where the user's
 //!   pixels end, on along the forearm from the hand joint, at its smoothed depth; the lengths
 //!   in space. Height = the mean of the map's value, 7 heads and 7/4 hip heights
-//!   (Eq. 6.7; the fingertip rows of Table 6.2 are measured but not averaged in: a relaxed
+//!   (Eq. 6.7; the fingertip rows of Table 6.2 are not averaged in: a relaxed
 //!   hand's fingers curl and the estimates came out 25-30 % short).
 //! - Shoulder width from the map: along the shoulder joints' row, from each shoulder joint out
 //!   to the end of the user's pixels. Head width: the widest row of the head (above the neck). Shoulder width = the mean of the map's value and 3 head widths.
@@ -190,18 +190,9 @@ fn measure_frame(frame: &CalibrationFrame) -> Option<SeedMeasurement> {
     // Fingertips: on along the forearm from the hand until the user's pixels end; both
     // arms, averaged.
     let mut elbow_tips = Vec::new();
-    let mut wrist_tips = Vec::new();
-    for (e_joint, w_joint, h_joint) in [
-        (
-            KinectJoint::ElbowLeft,
-            KinectJoint::WristLeft,
-            KinectJoint::HandLeft,
-        ),
-        (
-            KinectJoint::ElbowRight,
-            KinectJoint::WristRight,
-            KinectJoint::HandRight,
-        ),
+    for (e_joint, h_joint) in [
+        (KinectJoint::ElbowLeft, KinectJoint::HandLeft),
+        (KinectJoint::ElbowRight, KinectJoint::HandRight),
     ] {
         let (Some(e), Some(h)) = (px(e_joint), px(h_joint)) else {
             continue;
@@ -223,15 +214,12 @@ fn measure_frame(frame: &CalibrationFrame) -> Option<SeedMeasurement> {
             s.depth_mm[tv as usize * WIDTH + tu as usize] / 1000.0,
         );
         elbow_tips.push(tip.distance(frame.joints[e_joint.index()]));
-        wrist_tips.push(tip.distance(frame.joints[w_joint.index()]));
     }
     let mean = |v: &[f32]| (!v.is_empty()).then(|| v.iter().sum::<f32>() / v.len() as f32);
     let elbow_tip = mean(&elbow_tips);
-    let wrist_tip = mean(&wrist_tips);
-    // The fingertip estimates (7/2 elbow-fingertips, 7 wrist-fingertips) are measured but
-    // left out of the mean: a relaxed hand's fingers curl, and the lengths came out 25-30 %
-    // short, taking 20 cm off the height.
-    let _ = wrist_tip;
+    // The fingertip estimates (7/2 elbow-fingertips, 7 wrist-fingertips) are left out of
+    // the mean: a relaxed hand's fingers curl, and the lengths came out 25-30 % short,
+    // taking 20 cm off the height. The elbow-fingertip is kept for Algorithm 8.
     let height = mean(&[height_map, 7.0 * head_height, 7.0 / 4.0 * hip_height])?;
     let (left, right) = if sh_l.x > sh_r.x {
         (sh_l, sh_r)

@@ -4,7 +4,7 @@
 
 use fitroom_depth::DepthFrame;
 use fitroom_sensor::KinectJoint;
-use fitroom_tracker::{TrackBody, Tracked};
+use fitroom_tracker::Tracked;
 use glam::{Quat, Vec3};
 
 use crate::posed::Placement;
@@ -24,12 +24,12 @@ pub fn calibration_frame(frame: &DepthFrame, tracked: &Tracked) -> CalibrationFr
 }
 
 /// The pose `tracked` found, as the fit takes it: each bone's turn from rest, and where the
-/// body stands (its rotation, its pelvis).
-pub fn tracked_pose(body: &TrackBody, tracked: &Tracked) -> (Vec<Quat>, Placement) {
-    let posed = body.pose(&tracked.pose);
+/// body stands (its rotation, and its pelvis: the Kinect hip centre is the pelvis bone's
+/// head).
+pub fn tracked_pose(tracked: &Tracked) -> (Vec<Quat>, Placement) {
     let placement = Placement {
         rotation: tracked.pose.rotation,
-        pelvis: posed.head(body.root),
+        pelvis: tracked.joints[KinectJoint::HipCenter.index()].position,
     };
     (tracked.pose.local.clone(), placement)
 }

@@ -31,7 +31,8 @@ use glam::Vec3;
 use crate::camera::{DepthCamera, PIXELS, WIDTH};
 use crate::frame::DepthFrame;
 pub use raster::DepthBuffer;
-use readings::{NoiseTables, splitmix64};
+use readings::NoiseTables;
+pub use readings::splitmix64;
 use spans::Spans;
 use still::{Layer, Still};
 

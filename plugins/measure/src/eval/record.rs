@@ -4,7 +4,9 @@
 //! sensor's noise; and the truth beside it (the person's pixels, skeleton, pose).
 
 use fitroom_body::{BodyModel, MODEL_TO_SENSOR, RestPose, Shape, forward_kinematics};
-use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
+use fitroom_depth::synthetic::{
+    Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, splitmix64,
+};
 use fitroom_depth::{DepthCamera, HEIGHT};
 use glam::{Quat, Vec3};
 
@@ -38,7 +40,7 @@ impl Stance {
     pub fn drawn(seed: u64) -> Self {
         let mut state = seed ^ 0x5eed_5eed;
         let mut uniform = || {
-            state = splitmix(state);
+            state = splitmix64(state);
             (state >> 11) as f32 / (1u64 << 53) as f32
         };
         Self {
@@ -50,13 +52,6 @@ impl Stance {
             sensor_height_m: 0.9 + 0.1 * uniform(),
         }
     }
-}
-
-fn splitmix(mut z: u64) -> u64 {
-    z = z.wrapping_add(0x9e37_79b9_7f4a_7c15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xbf58_476d_1ce4_e5b9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94d0_49bb_1331_11eb);
-    z ^ (z >> 31)
 }
 
 /// Per bone, the rotation from rest of the calibration pose: each upper arm lifted sideways

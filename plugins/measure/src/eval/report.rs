@@ -275,7 +275,7 @@ pub fn tracked(model: &BodyModel, frames: &[CalibrationFrame]) -> Result<Tracked
     for f in frames {
         if let Some(t) = tracker.track(&f.depth) {
             out.push(calibration_frame(&f.depth, &t));
-            pose = Some(tracked_pose(&tracker.body, &t));
+            pose = Some(tracked_pose(&t));
         }
     }
     let (locals, placement) = pose.ok_or("the tracker found nobody in the calibration")?;
