@@ -144,13 +144,18 @@ pub fn record(
         };
         let posed = posing.body(shape, &now)?;
         let joints = posing.kinect_joints(&posed, &now);
-        scene.meshes.truncate(scene.still);
-        scene.meshes.push(SceneMesh {
-            positions: posed.vertices.clone(),
-            triangles: model.triangles.clone(),
-            label: Label::Body,
-            closed: true,
-        });
+        // The body's mesh is added once; each frame moves its vertices.
+        if scene.meshes.len() == scene.still {
+            scene.meshes.push(SceneMesh {
+                positions: Vec::new(),
+                triangles: model.triangles.clone(),
+                label: Label::Body,
+                closed: true,
+            });
+        }
+        if let Some(mesh) = scene.meshes.last_mut() {
+            mesh.positions.clone_from(&posed.vertices);
+        }
         let filmed = camera.render(&scene, f64::from(t));
         let mask: Vec<bool> = filmed
             .labels
