@@ -139,7 +139,7 @@ fn avatar_root_travels_the_clips_path_through_depth_and_the_tracker() {
 /// says so) and the kiosk goes on unmeasured after `measure_s` (1 s here, 8 s shipped).
 #[test]
 fn the_shipped_default_tracks_the_performer_into_try_on() {
-    let (config, _) = common::kiosk_config_copy("walker", &[("measure_s: 8.0", "measure_s: 1.0")]);
+    let (config, _) = common::kiosk_config_copy("walker", &[("measure_s: 12.0", "measure_s: 1.0")]);
     let options =
         AppOptions::with_config(Mode::Headless { render: false }, &config).expect("it reads");
     assert!(options.treadmill);

@@ -1,5 +1,6 @@
 //! `fitroom measure`: measuring people from depth. `prior` learns the shape prior from ANSUR
-//! II, `eval` measures ANSUR II subjects filmed by the synthetic Kinect with both methods.
+//! II, `eval` measures ANSUR II subjects filmed by the synthetic Kinect with both methods,
+//! `plot` draws an evaluation's error distributions.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -8,7 +9,7 @@ use anyhow::{Context, Result, bail};
 use clap::Subcommand;
 use fitroom_body::SizeChart;
 use fitroom_body::ansur::{read_survey, sample};
-use fitroom_measure::eval::{MeasureReport, PoseSource, evaluate, held_out, training};
+use fitroom_measure::eval::{EvalOptions, MeasureReport, PoseSource, evaluate, held_out, training};
 use fitroom_measure::prior::learn;
 use fitroom_measure::{FitSettings, ShapePrior};
 
@@ -23,6 +24,17 @@ pub enum MeasureCommand {
     /// calibration pose by the synthetic Kinect v1, with the seed's method and ours, against
     /// the filmed bodies' own measurements.
     Eval(EvalArgs),
+    /// Plot the error distributions of an evaluation's JSON report (`eval --report`).
+    Plot(PlotArgs),
+}
+
+#[derive(clap::Args)]
+pub struct PlotArgs {
+    /// The evaluation's JSON report.
+    pub report: PathBuf,
+    /// The picture to write (PNG).
+    #[arg(long)]
+    pub out: PathBuf,
 }
 
 #[derive(clap::Args)]
@@ -58,9 +70,22 @@ pub struct EvalArgs {
     /// frames, as in the kiosk) or `truth` (the filmed pose: the measurement alone).
     #[arg(long, value_enum, default_value = "tracker")]
     pub pose: PoseArg,
-    /// Calibration frames per subject (30: one second).
+    /// Calibration frames per view (30: one second).
     #[arg(long, default_value_t = 30)]
     pub frames: usize,
+    /// The second view's turn to the side, degrees (as the kiosk asks); 0: the front view
+    /// alone.
+    #[arg(long, default_value_t = fitroom_measure::eval::TURN_DEG)]
+    pub turn: f32,
+    /// Dress the subjects in this garment (a pattern garment such as
+    /// `assets/garments/tshirt.ron`; each in the size its table gives them).
+    #[arg(long)]
+    pub garment: Option<PathBuf>,
+    /// Weight of surface points outside the fitted skin against those inside (1: the bare
+    /// body the kiosk assumes; lower trusts the surface seen less where clothes may hang,
+    /// see docs/measure.md).
+    #[arg(long, default_value_t = 1.0)]
+    pub outside_weight: f32,
     /// Print the report as JSON (every subject) instead of the summary.
     #[arg(long)]
     pub json: bool,
@@ -70,6 +95,9 @@ pub struct EvalArgs {
     /// Write the summary (Markdown) here.
     #[arg(long)]
     pub summary: Option<PathBuf>,
+    /// Draw the error distributions here (PNG).
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
 }
 
 #[derive(Clone, Copy, clap::ValueEnum)]
@@ -82,7 +110,22 @@ pub fn run(command: MeasureCommand) -> Result<()> {
     match command {
         MeasureCommand::Prior(args) => prior(args),
         MeasureCommand::Eval(args) => eval(args),
+        MeasureCommand::Plot(args) => plot(args),
     }
+}
+
+fn plot(args: PlotArgs) -> Result<()> {
+    let text = std::fs::read_to_string(&args.report)
+        .with_context(|| format!("cannot read '{}'", args.report.display()))?;
+    let report: MeasureReport = serde_json::from_str(&text).with_context(|| {
+        format!(
+            "'{}' is not an evaluation report (write one with `fitroom measure eval --report`)",
+            args.report.display()
+        )
+    })?;
+    crate::cli::measure_plot::plot_errors(&report, &args.out)?;
+    println!("wrote {}", args.out.display());
+    Ok(())
 }
 
 fn bar(total: usize, what: &str) -> indicatif::ProgressBar {
@@ -143,6 +186,12 @@ fn chart(name: &str) -> Result<SizeChart> {
 
 fn eval(args: EvalArgs) -> Result<()> {
     let s = &args.survey;
+    if !(args.outside_weight > 0.0 && args.outside_weight <= 1.0) {
+        bail!(
+            "--outside-weight {} is out of range: give a weight in (0, 1]",
+            args.outside_weight
+        );
+    }
     if args.frames < fitroom_measure::MIN_FRAMES {
         bail!(
             "--frames {} is too few: a calibration needs at least {}",
@@ -159,20 +208,34 @@ fn eval(args: EvalArgs) -> Result<()> {
         chart("en13402-female-seed002.ron")?,
         chart("en13402-male-seed002.ron")?,
     );
+    let garment = match &args.garment {
+        None => None,
+        Some(path) => Some(std::sync::Arc::new(
+            fitroom_garment::GarmentSource::load(path)
+                .with_context(|| format!("cannot read the garment '{}'", path.display()))?,
+        )),
+    };
     let progress = bar(subjects.len(), "subjects measured");
     let report = evaluate(
         &model,
         &subjects,
         &prior,
         (&women, &men),
-        &FitSettings::default(),
-        match args.pose {
-            PoseArg::Tracker => PoseSource::Tracker,
-            PoseArg::Truth => PoseSource::Truth,
+        &FitSettings {
+            outside_weight: args.outside_weight,
+            ..FitSettings::default()
         },
-        args.frames,
-        s.seed,
-        s.threads,
+        &EvalOptions {
+            pose: match args.pose {
+                PoseArg::Tracker => PoseSource::Tracker,
+                PoseArg::Truth => PoseSource::Truth,
+            },
+            frames: args.frames,
+            turn_deg: args.turn,
+            seed: s.seed,
+            threads: s.threads,
+            garment,
+        },
         &|_, _| progress.inc(1),
     );
     progress.finish_and_clear();
@@ -180,6 +243,9 @@ fn eval(args: EvalArgs) -> Result<()> {
     if let Some(path) = &args.report {
         std::fs::write(path, &json)
             .with_context(|| format!("cannot write '{}'", path.display()))?;
+    }
+    if let Some(path) = &args.plot {
+        crate::cli::measure_plot::plot_errors(&report, path)?;
     }
     let md = markdown(&report);
     if let Some(path) = &args.summary {
@@ -198,8 +264,23 @@ pub fn markdown(r: &MeasureReport) -> String {
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "{} ANSUR II subjects (held out from the prior; seed {}), {} calibration frames each, pose from {}; {} failed.\n",
-        r.subjects, r.seed, r.frames, r.pose, r.failed
+        "{} ANSUR II subjects (held out from the prior; seed {}){}, {} calibration frames {}, pose from {}; {} failed.\n",
+        r.subjects,
+        r.seed,
+        r.garment
+            .as_ref()
+            .map_or(String::new(), |g| format!(" wearing the {g} in their size")),
+        r.frames,
+        if r.turn_deg == 0.0 {
+            "facing the camera".to_string()
+        } else {
+            format!(
+                "facing the camera and {} more turned {:.0}°",
+                r.frames, r.turn_deg
+            )
+        },
+        r.pose,
+        r.failed
     );
     let _ = writeln!(
         md,

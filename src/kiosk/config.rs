@@ -75,13 +75,13 @@ pub struct TimingsConfig {
     /// Seconds without a tracked person before going back to `Attract` (0.1-600).
     pub lost_s: f32,
     /// Seconds `Calibrate` tries to measure the person (from depth) before going on to
-    /// `TryOn` unmeasured (1-600; default 8).
+    /// `TryOn` unmeasured (1-600; default 12).
     #[serde(default = "default_measure_s")]
     pub measure_s: f32,
 }
 
 fn default_measure_s() -> f32 {
-    8.0
+    12.0
 }
 
 /// One garment offered.

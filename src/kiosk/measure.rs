@@ -5,11 +5,12 @@
 
 use bevy::ecs::system::SystemParam;
 use bevy::prelude::*;
+use fitroom_body::Shape;
 use fitroom_body::plugin::AvatarShape;
-use fitroom_body::{Gender, Shape, SizeChart};
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_garment::plugin::{GarmentRequest, GarmentStatus};
 use fitroom_garment::source::GarmentSource;
+use fitroom_measure::garment_size::garment_chart;
 use fitroom_measure::plugin::{BodyMeasurements, Calibration, CalibrationStatus, MeasurePrior};
 
 use super::KioskState;
@@ -121,22 +122,10 @@ fn recommend(
     measured: &BodyMeasurements,
 ) -> Result<(Option<String>, String), String> {
     let source = GarmentSource::load(file).map_err(|e| e.to_string())?;
-    let Some(pattern) = source.pattern() else {
-        return Ok((None, "this garment comes in one size".into()));
+    let chart = match garment_chart(&source) {
+        Ok(chart) => chart,
+        Err(why) => return Ok((None, why)),
     };
-    let sizes: Vec<_> = pattern
-        .sizes
-        .iter()
-        .map(|s| (s.label.clone(), s.body_cm.clone()))
-        .collect();
-    if sizes.iter().all(|(_, m)| m.is_empty()) {
-        return Ok((
-            None,
-            "the garment's sizes state no body measurements".into(),
-        ));
-    }
-    let chart = SizeChart::from_nominal(&pattern.name, Gender::Unisex, &[], &sizes)
-        .map_err(|e| format!("the garment's sizes: {e}"))?;
     let r = chart.recommend(&measured.measurements);
     let reasons: Vec<String> = r
         .measures

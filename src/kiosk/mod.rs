@@ -46,7 +46,7 @@ impl Default for KioskTimings {
         Self {
             calibrate_s: 2.0,
             lost_s: 3.0,
-            measure_s: 8.0,
+            measure_s: 12.0,
         }
     }
 }

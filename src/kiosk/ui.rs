@@ -83,17 +83,18 @@ fn status_overlay(
                     "D: show the sensor skeletons"
                 });
                 if *state.get() == KioskState::Calibrate {
-                    match calibration.as_ref().map(|c| &c.status) {
-                        Some(CalibrationStatus::Collecting { frames, need, hint }) => {
-                            ui.add(
-                                egui::ProgressBar::new(*frames as f32 / (*need).max(1) as f32)
-                                    .text("measuring: stand still, arms a little away"),
-                            );
+                    match calibration.as_ref().map(|c| (c, &c.status)) {
+                        Some((c, CalibrationStatus::Collecting { view, hint, .. })) => {
+                            ui.add(egui::ProgressBar::new(c.progress()).text(if *view == 0 {
+                                "measuring: face the mirror, stand still, arms a little away"
+                            } else {
+                                "measuring: turned halfway to your left, stand still"
+                            }));
                             if let Some(hint) = hint {
                                 ui.colored_label(egui::Color32::from_rgb(230, 160, 60), hint);
                             }
                         }
-                        Some(CalibrationStatus::Fitting) => {
+                        Some((_, CalibrationStatus::Fitting)) => {
                             ui.label("measuring: fitting your body…");
                         }
                         _ => {

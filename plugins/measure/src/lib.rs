@@ -1,17 +1,18 @@
 //! Measuring the person from depth (seed 000 ch. 6, then beyond it), Bevy-free.
 //!
 //! The person stands still for about a second in the calibration pose (arms a little away
-//! from the body); the calibration frames (depth, the person's pixels, the skeleton) are
-//! averaged per pixel ([`AveragedView`]) and measured two ways:
+//! from the body) facing the mirror, then another second turned halfway to their left; each
+//! view's calibration frames (depth, the person's pixels, the skeleton) are averaged per
+//! pixel ([`AveragedView`]) and measured two ways:
 //!
 //! - [`seed`]: the seed's method as the baseline (Algorithms 6-9 and Table 6.2: the depth map
 //!   smoothed, height and shoulder width read off it and estimated from the body's
 //!   proportions, averaged over the frames);
 //! - [`fit`]: ours: MakeHuman's body (the same sliders as the fit to typed-in measurements)
-//!   fitted to the person's surface points and silhouette in the tracked pose, then measured
-//!   as any body is ([`fitroom_body::BodyModel::measure`]). The camera sees the front; the
-//!   back is where the body model puts it for that front (its sliders move front and back
-//!   together).
+//!   fitted to the person's surface points and silhouette in both views, the pose refined
+//!   from the tracked skeleton's, then measured as any body is
+//!   ([`fitroom_body::BodyModel::measure`]). The camera sees the front and a flank; the back
+//!   is where the shape prior puts it for what was seen.
 //!
 //! # Where things are
 //!
@@ -20,13 +21,16 @@
 //! - `posed`: the shape space, the posed body and how its skin moves with each slider;
 //! - `silhouette`: the distance outside the person's silhouette;
 //! - `fit`: our fit; `prior`: the shape prior it leans on; `person`: both genders tried;
-//! - `tracked`: the tracker's output as calibration input;
-//! - `eval`: the evaluation on ANSUR II subjects filmed by the synthetic Kinect;
+//! - `tracked`: the tracker's output as calibration input (frames, placement, starting pose);
+//! - `garment_size`: a garment's own size table as a chart (the size recommended);
+//! - `eval`: the evaluation on ANSUR II subjects filmed by the synthetic Kinect (`dressed`:
+//!   wearing a garment);
 //! - `plugin` (feature `plugin`): the Bevy adapter that measures the person while the kiosk
 //!   calibrates.
 
 pub mod eval;
 pub mod fit;
+pub mod garment_size;
 pub mod person;
 #[cfg(feature = "plugin")]
 pub mod plugin;
@@ -37,7 +41,7 @@ pub mod silhouette;
 pub mod tracked;
 pub mod view;
 
-pub use fit::{BodyEstimate, FitSettings, fit_body};
+pub use fit::{BodyEstimate, FitSettings, ViewPose, fit_body};
 pub use person::{PersonMeasurement, measure_person};
 pub use posed::{Placement, PosedBody, Posing, ShapeSpace};
 pub use prior::{GenderPrior, ShapePrior};

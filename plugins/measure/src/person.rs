@@ -3,13 +3,11 @@
 //! explanation of the frames kept.
 
 use fitroom_body::BodyModel;
-use glam::Quat;
 
 use crate::MeasureError;
-use crate::fit::{BodyEstimate, FitSettings, fit_body};
-use crate::posed::{Placement, ShapeSpace};
+use crate::fit::{BodyEstimate, FitSettings, ViewPose, fit_body};
+use crate::posed::ShapeSpace;
 use crate::prior::ShapePrior;
-use crate::view::AveragedView;
 
 /// The person's body, as measured.
 #[derive(Clone, Debug)]
@@ -21,12 +19,10 @@ pub struct PersonMeasurement {
     pub other_cost: f64,
 }
 
-/// Fits `view` with both priors (at once when `settings.threads` ≥ 2) and keeps the better.
+/// Fits `views` with both priors (at once when `settings.threads` ≥ 2) and keeps the better.
 pub fn measure_person(
     model: &BodyModel,
-    view: &AveragedView,
-    locals: &[Quat],
-    placement: Placement,
+    views: &[ViewPose],
     prior: &ShapePrior,
     settings: &FitSettings,
 ) -> Result<PersonMeasurement, MeasureError> {
@@ -38,7 +34,7 @@ pub fn measure_person(
             threads,
             ..settings.clone()
         };
-        fit_body(model, view, locals, placement, &start, Some(p), &s)
+        fit_body(model, views, &start, Some(p), &s)
     };
     let (women, men) = if settings.threads >= 2 {
         let per = settings.threads / 2;

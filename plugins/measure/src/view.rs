@@ -7,6 +7,7 @@ use std::sync::Arc;
 
 use fitroom_depth::{DepthCamera, DepthFrame};
 use fitroom_sensor::KinectJoint;
+use fitroom_tracker::Plane;
 use glam::Vec3;
 
 use crate::MeasureError;
@@ -20,6 +21,8 @@ pub struct CalibrationFrame {
     pub mask: Arc<[bool]>,
     /// The 20 Kinect joints, sensor space, metres ([`KinectJoint::ALL`] order).
     pub joints: [Vec3; KinectJoint::COUNT],
+    /// The floor the person stands on, sensor space, if known.
+    pub floor: Option<Plane>,
 }
 
 /// The person seen over the calibration frames, averaged per pixel.
@@ -40,6 +43,8 @@ pub struct AveragedView {
     pub scene_m: Vec<f32>,
     /// The frames' mean skeleton.
     pub joints: [Vec3; KinectJoint::COUNT],
+    /// The floor, as the last frame that knew it saw it.
+    pub floor: Option<Plane>,
     pub frames: usize,
 }
 
@@ -142,6 +147,7 @@ impl AveragedView {
             readings,
             mask,
             joints,
+            floor: frames.iter().rev().find_map(|f| f.floor),
             frames: n,
         })
     }

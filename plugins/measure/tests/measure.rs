@@ -10,10 +10,10 @@ use fitroom_body::{BodyModel, Measure, SizeChart};
 use fitroom_depth::synthetic::NoiseSettings;
 use fitroom_depth::{DepthCamera, DepthFrame, PIXELS};
 use fitroom_measure::eval::{
-    MeasureReport, PoseSource, Stance, evaluate, held_out, record, training,
+    EvalOptions, MeasureReport, PoseSource, Stance, evaluate, held_out, record, training,
 };
 use fitroom_measure::{
-    AveragedView, CalibrationFrame, FitSettings, MeasureError, ShapePrior, fit_body, seed,
+    AveragedView, CalibrationFrame, FitSettings, MeasureError, ShapePrior, ViewPose, fit_body, seed,
 };
 use glam::Vec3;
 
@@ -46,10 +46,11 @@ fn run(count: usize, seed: u64, pose: PoseSource) -> MeasureReport {
         &prior,
         (&w, &m),
         &FitSettings::default(),
-        pose,
-        30,
-        seed,
-        2,
+        &EvalOptions {
+            pose,
+            seed,
+            ..EvalOptions::default()
+        },
         &|_, _| {},
     );
     for r in &report.results {
@@ -203,6 +204,7 @@ fn still_frames(
         count,
         NoiseSettings::default(),
         5,
+        None,
     )
     .expect("a recording");
     (model, rec.frames.clone(), rec)
@@ -249,11 +251,14 @@ fn frames_without_depth_are_refused() {
     }
     let view = AveragedView::new(&frames).expect("averaged");
     let prior = ShapePrior::shipped().expect("the shipped prior");
+    let views = [ViewPose {
+        view: &view,
+        locals: &rec.locals,
+        placement: rec.placement,
+    }];
     let e = fit_body(
         &model,
-        &view,
-        &rec.locals,
-        rec.placement,
+        &views,
         &fitroom_body::Shape::default(),
         Some(prior.of(true)),
         &FitSettings::default(),

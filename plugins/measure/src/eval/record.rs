@@ -13,9 +13,10 @@ use glam::{Quat, Vec3};
 use crate::MeasureError;
 use crate::posed::{Placement, PosedBody, Posing};
 use crate::view::CalibrationFrame;
+use fitroom_tracker::Plane;
 
 /// Where and how the person stands (drawn per subject from the seed).
-#[derive(Clone, Copy, Debug, serde::Serialize)]
+#[derive(Clone, Copy, Debug, serde::Serialize, serde::Deserialize)]
 pub struct Stance {
     /// From the sensor to the pelvis, metres.
     pub distance_m: f32,
@@ -54,6 +55,21 @@ impl Stance {
     }
 }
 
+/// The calibration's second view: after standing facing the sensor, the person turns this
+/// far to their left (an eighth of a turn: the side of the chest, waist and hips comes into
+/// view while the front still shows; see `docs/measure.md` for the turns tried).
+pub const TURN_DEG: f32 = 45.0;
+
+impl Stance {
+    /// The same stance turned `degrees` further about the vertical.
+    pub fn turned(&self, degrees: f32) -> Self {
+        Self {
+            yaw_deg: self.yaw_deg + degrees,
+            ..*self
+        }
+    }
+}
+
 /// Per bone, the rotation from rest of the calibration pose: each upper arm lifted sideways
 /// (about the model's forward axis) by its angle.
 pub fn calibration_pose(model: &BodyModel, rest: &RestPose, stance: &Stance) -> Vec<Quat> {
@@ -85,8 +101,18 @@ pub struct Recording {
     pub stance: Stance,
 }
 
+/// A garment as the person wears it in the calibration pose: its surface with the body's
+/// pelvis at the origin, turned as a body facing the sensor is ([`MODEL_TO_SENSOR`]); see
+/// [`super::dressed::worn`].
+#[derive(Clone, Debug)]
+pub struct Worn {
+    pub positions: Vec<Vec3>,
+    pub triangles: Vec<[u32; 3]>,
+}
+
 /// Films the body of `shape` in `stance` for `frames` frames (30 Hz) with the sensor's
-/// `noise` (the published model: [`NoiseSettings::default`]), seeded by `seed`.
+/// `noise` (the published model: [`NoiseSettings::default`]), seeded by `seed`; wearing
+/// `worn` if given (the garment moves with the body).
 pub fn record(
     model: &BodyModel,
     shape: &Shape,
@@ -94,6 +120,7 @@ pub fn record(
     frames: usize,
     noise: NoiseSettings,
     seed: u64,
+    worn: Option<&Worn>,
 ) -> Result<Recording, MeasureError> {
     let rest_body = model.shaped(shape)?;
     let locals = calibration_pose(model, &rest_body.rest_pose, stance);
@@ -153,8 +180,26 @@ pub fn record(
                 closed: true,
             });
         }
-        if let Some(mesh) = scene.meshes.last_mut() {
+        if let Some(mesh) = scene.meshes.get_mut(scene.still) {
             mesh.positions.clone_from(&posed.vertices);
+        }
+        if let Some(worn) = worn {
+            let yaw = Quat::from_rotation_y(stance.yaw_deg.to_radians());
+            let positions = worn
+                .positions
+                .iter()
+                .map(|p| now.pelvis + yaw * *p)
+                .collect();
+            let mesh = SceneMesh {
+                positions,
+                triangles: worn.triangles.clone(),
+                label: Label::Garment,
+                closed: false,
+            };
+            match scene.meshes.get_mut(scene.still + 1) {
+                Some(m) => *m = mesh,
+                None => scene.meshes.push(mesh),
+            }
         }
         let filmed = camera.render(&scene, f64::from(t));
         let mask: Vec<bool> = filmed
@@ -166,6 +211,10 @@ pub fn record(
             depth: filmed.frame,
             mask: mask.into(),
             joints,
+            floor: Some(Plane {
+                normal: Vec3::Y,
+                d: -floor_y,
+            }),
         });
         body.get_or_insert(posed);
     }

@@ -6,19 +6,24 @@ use std::time::Instant;
 use fitroom_body::ansur::AnsurSubject;
 use fitroom_body::{BodyModel, FitOptions, FitRequest, Measure, Measurements, SizeChart, fit};
 use fitroom_math::stats::percentile;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
-use super::record::{Stance, record};
+use super::dressed::{DressOptions, worn};
+use super::record::{Stance, TURN_DEG, record};
 use crate::fit::FitSettings;
+use crate::fit::ViewPose;
+use crate::garment_size::garment_chart;
 use crate::person::measure_person;
 use crate::posed::Placement;
 use crate::prior::ShapePrior;
 use crate::seed;
-use crate::tracked::{calibration_frame, tracked_pose};
+use crate::tracked::{TrackedView, calibration_frame, tracked_placement, tracked_views};
 use crate::view::{AveragedView, CalibrationFrame};
 use fitroom_depth::synthetic::NoiseSettings;
+use fitroom_garment::GarmentSource;
 use fitroom_math::parallel_map;
 use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
+use std::sync::Arc;
 
 /// The measurements the evaluation reports (the list; both waists).
 pub const EVALUATED: [Measure; 10] = [
@@ -46,7 +51,7 @@ pub fn held_out(subjects: &[AnsurSubject]) -> Vec<AnsurSubject> {
 }
 
 /// Where the fit's pose and the person's pixels come from.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Serialize, Deserialize)]
 pub enum PoseSource {
     /// The filmed pose and the renderer's body pixels (the measurement alone).
     Truth,
@@ -55,7 +60,7 @@ pub enum PoseSource {
 }
 
 /// One subject measured.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct SubjectResult {
     pub id: String,
     pub female: bool,
@@ -78,11 +83,13 @@ pub struct SubjectResult {
     pub size_ours: Option<String>,
     /// From the averaged frames to the measured body, ms.
     pub fit_ms: f64,
+    /// The size of the garment worn, if one was.
+    pub garment_size: Option<String>,
     pub error: Option<String>,
 }
 
 /// The error distribution of one measurement, cm.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MeasureStats {
     pub measure: Measure,
     pub count: usize,
@@ -114,12 +121,16 @@ impl MeasureStats {
 }
 
 /// The evaluation's figures.
-#[derive(Clone, Debug, Serialize)]
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MeasureReport {
     pub subjects: usize,
     pub failed: usize,
     pub seed: u64,
     pub frames: usize,
+    /// The second view's turn, degrees (0: the front view alone).
+    pub turn_deg: f32,
+    /// The garment the subjects wore, if any.
+    pub garment: Option<String>,
     /// Where the pose came from ("truth": the filmed pose).
     pub pose: String,
     pub ours: Vec<MeasureStats>,
@@ -140,20 +151,48 @@ pub struct MeasureReport {
     pub results: Vec<SubjectResult>,
 }
 
+/// How the evaluation films and measures.
+#[derive(Clone, Debug, Serialize)]
+pub struct EvalOptions {
+    /// The garment the subjects wear (each in the size its own table gives their true
+    /// measurements), or none.
+    #[serde(skip)]
+    pub garment: Option<Arc<GarmentSource>>,
+    pub pose: PoseSource,
+    /// Calibration frames per view.
+    pub frames: usize,
+    /// The second view's turn from the first, degrees (the calibration's turn to the side);
+    /// 0: the front view alone.
+    pub turn_deg: f32,
+    /// Draws the stances and the sensor's noise.
+    pub seed: u64,
+    /// Subjects measured at once.
+    pub threads: usize,
+}
+
+impl Default for EvalOptions {
+    fn default() -> Self {
+        Self {
+            pose: PoseSource::Tracker,
+            frames: 30,
+            turn_deg: TURN_DEG,
+            seed: 1,
+            threads: 2,
+            garment: None,
+        }
+    }
+}
+
 /// Measures each subject: their body made from their ANSUR measurements, filmed in a
-/// calibration stance drawn from `seed`, measured by both methods. `charts` are the
-/// women's and the men's size charts. Subjects run on `threads` threads.
-#[allow(clippy::too_many_arguments)]
+/// calibration stance drawn from `options.seed` (and turned, for the second view), measured
+/// by both methods. `charts` are the women's and the men's size charts.
 pub fn evaluate(
     model: &BodyModel,
     subjects: &[AnsurSubject],
     prior: &ShapePrior,
     charts: (&SizeChart, &SizeChart),
     settings: &FitSettings,
-    pose: PoseSource,
-    frames: usize,
-    seed: u64,
-    threads: usize,
+    options: &EvalOptions,
     progress: &(dyn Fn(usize, usize) + Sync),
 ) -> MeasureReport {
     let done = std::sync::atomic::AtomicUsize::new(0);
@@ -162,16 +201,15 @@ pub fn evaluate(
         threads: 1,
         ..settings.clone()
     };
-    let results = parallel_map(&indexed, threads, |&(k, s)| {
+    let results = parallel_map(&indexed, options.threads, |&(k, s)| {
         let r = one(
             model,
             s,
             prior,
             charts,
             &fit_settings,
-            pose,
-            frames,
-            seed ^ (k as u64) << 20,
+            options,
+            options.seed ^ (k as u64) << 20,
         );
         progress(
             done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1,
@@ -179,18 +217,16 @@ pub fn evaluate(
         );
         r
     });
-    summarise(results, seed, frames, pose)
+    summarise(results, options)
 }
 
-#[allow(clippy::too_many_arguments)]
 fn one(
     model: &BodyModel,
     s: &AnsurSubject,
     prior: &ShapePrior,
     (women, men): (&SizeChart, &SizeChart),
     settings: &FitSettings,
-    pose: PoseSource,
-    frames: usize,
+    options: &EvalOptions,
     seed: u64,
 ) -> SubjectResult {
     let stance = Stance::drawn(seed);
@@ -208,6 +244,7 @@ fn one(
         size_truth: None,
         size_ours: None,
         fit_ms: 0.0,
+        garment_size: None,
         error: None,
     };
     let request = FitRequest {
@@ -215,33 +252,96 @@ fn one(
         age_years: None,
         targets: s.measurements.clone(),
     };
-    let run =
+    let mut garment_size: Option<String> = None;
+    let mut run =
         || -> Result<(Measurements, Measurements, seed::SeedMeasurement, bool, f64), String> {
             let shape = fit(model, &request, &FitOptions::default())
                 .map_err(|e| e.to_string())?
                 .shape;
-            let rec = record(
-                model,
-                &shape,
-                &stance,
-                frames,
-                NoiseSettings::default(),
-                seed,
-            )
-            .map_err(|e| e.to_string())?;
-            let truth = model
-                .measure(&rec.body.positions)
+            // Dressed: the garment in the subject's size, settled once on the body in the
+            // calibration pose; it turns with the body.
+            let worn = match &options.garment {
+                None => None,
+                Some(source) => {
+                    let at_rest = model.shaped(&shape).map_err(|e| e.to_string())?;
+                    let measured = model
+                        .measure(&at_rest.positions)
+                        .map_err(|e| e.to_string())?;
+                    let size = garment_chart(source)
+                        .ok()
+                        .and_then(|c| c.recommend(&measured).size);
+                    let (worn, dressed) = worn(
+                        model,
+                        &shape,
+                        &stance,
+                        source,
+                        size.as_deref(),
+                        &DressOptions::default(),
+                    )
+                    .map_err(|e| e.to_string())?;
+                    garment_size = Some(dressed.size);
+                    Some(worn)
+                }
+            };
+            let mut stances = vec![stance];
+            if options.turn_deg != 0.0 {
+                stances.push(stance.turned(options.turn_deg));
+            }
+            let mut truth = None;
+            let mut filmed = Vec::with_capacity(stances.len());
+            for (i, st) in stances.iter().enumerate() {
+                let rec = record(
+                    model,
+                    &shape,
+                    st,
+                    options.frames,
+                    NoiseSettings::default(),
+                    seed ^ (i as u64) << 40,
+                    worn.as_ref(),
+                )
                 .map_err(|e| e.to_string())?;
-            let (frames, locals, placement) = match pose {
-                PoseSource::Truth => (rec.frames, rec.locals, rec.placement),
-                PoseSource::Tracker => tracked(model, &rec.frames)?,
+                if truth.is_none() {
+                    truth = Some(
+                        model
+                            .measure(&rec.body.positions)
+                            .map_err(|e| e.to_string())?,
+                    );
+                }
+                filmed.push(rec);
+            }
+            let truth = truth.ok_or("nothing was filmed")?;
+            // The frames the fit gets, and the front view's for the seed's method.
+            let (seen, front): (Vec<TrackedView>, Vec<CalibrationFrame>) = match options.pose {
+                PoseSource::Truth => {
+                    let front = filmed[0].frames.clone();
+                    let seen = filmed
+                        .into_iter()
+                        .map(|rec| {
+                            Ok(TrackedView {
+                                view: AveragedView::new(&rec.frames).map_err(|e| e.to_string())?,
+                                locals: rec.locals,
+                                placement: rec.placement,
+                            })
+                        })
+                        .collect::<Result<_, String>>()?;
+                    (seen, front)
+                }
+                PoseSource::Tracker => {
+                    let tracked = filmed
+                        .iter()
+                        .map(|rec| tracked(model, &rec.frames))
+                        .collect::<Result<Vec<_>, _>>()?;
+                    let front = tracked[0].0.clone();
+                    let seen = tracked_views(model, &tracked).map_err(|e| e.to_string())?;
+                    (seen, front)
+                }
             };
             let began = Instant::now();
-            let view = AveragedView::new(&frames).map_err(|e| e.to_string())?;
-            let ours = measure_person(model, &view, &locals, placement, prior, settings)
-                .map_err(|e| e.to_string())?;
+            let views: Vec<ViewPose> = seen.iter().map(|v| v.as_view_pose()).collect();
+            let ours = measure_person(model, &views, prior, settings).map_err(|e| e.to_string())?;
             let ms = began.elapsed().as_secs_f64() * 1e3;
-            let theirs = seed::measure(&frames).map_err(|e| e.to_string())?;
+            // The seed measures the front view.
+            let theirs = seed::measure(&front).map_err(|e| e.to_string())?;
             Ok((truth, ours.estimate.measurements, theirs, ours.female, ms))
         };
     match run() {
@@ -260,12 +360,13 @@ fn one(
         }
         Err(e) => result.error = Some(e),
     }
+    result.garment_size = garment_size;
     result
 }
 
-/// The frames as our tracker sees them (from the default body, as in the kiosk), and the
-/// pose it tracked in the last of them.
-pub type Tracked = (Vec<CalibrationFrame>, Vec<glam::Quat>, Placement);
+/// The frames as our tracker sees them (from the default body, as in the kiosk), and where
+/// it saw the body stand in the last of them.
+pub type Tracked = (Vec<CalibrationFrame>, Placement);
 
 pub fn tracked(model: &BodyModel, frames: &[CalibrationFrame]) -> Result<Tracked, String> {
     let body = TrackBody::new(model, &model.positions).map_err(|e| e.to_string())?;
@@ -275,19 +376,14 @@ pub fn tracked(model: &BodyModel, frames: &[CalibrationFrame]) -> Result<Tracked
     for f in frames {
         if let Some(t) = tracker.track(&f.depth) {
             out.push(calibration_frame(&f.depth, &t));
-            pose = Some(tracked_pose(&t));
+            pose = Some(tracked_placement(&t));
         }
     }
-    let (locals, placement) = pose.ok_or("the tracker found nobody in the calibration")?;
-    Ok((out, locals, placement))
+    let placement = pose.ok_or("the tracker found nobody in the calibration")?;
+    Ok((out, placement))
 }
 
-fn summarise(
-    results: Vec<SubjectResult>,
-    seed: u64,
-    frames: usize,
-    pose: PoseSource,
-) -> MeasureReport {
+fn summarise(results: Vec<SubjectResult>, options: &EvalOptions) -> MeasureReport {
     let ok: Vec<&SubjectResult> = results.iter().filter(|r| r.error.is_none()).collect();
     let errors = |m: Measure| -> Vec<f64> {
         ok.iter()
@@ -335,9 +431,11 @@ fn summarise(
     MeasureReport {
         subjects: results.len(),
         failed: results.len() - ok.len(),
-        seed,
-        frames,
-        pose: match pose {
+        seed: options.seed,
+        frames: options.frames,
+        turn_deg: options.turn_deg,
+        garment: options.garment.as_ref().map(|g| g.name()),
+        pose: match options.pose {
             PoseSource::Truth => "filmed pose and body pixels (truth)".into(),
             PoseSource::Tracker => "our tracker (pose, pixels, skeleton)".into(),
         },

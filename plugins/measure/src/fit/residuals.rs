@@ -1,0 +1,259 @@
+//! The fit's residuals: each surface point against the skin's triangle it lies over, the
+//! silhouette's skin seen in free space, the skin below the floor; and their cost.
+
+use fitroom_body::{BodyModel, compute_normals};
+use fitroom_depth::camera::{HEIGHT, WIDTH};
+use glam::Vec3;
+
+use super::FitSettings;
+use crate::posed::PosedBody;
+use crate::silhouette::OutsideDistance;
+use crate::view::AveragedView;
+
+/// Scene this far behind the skin is free space in front of the background, metres.
+const FREE_M: f32 = 0.15;
+
+/// Pixels per side of the tiles the visible skin is binned in for the partner search.
+const TILE: usize = 8;
+
+/// One residual's row: value, weight, and where it touches the body (a point of the skin
+/// as a blend of up to three vertices, and the direction it is measured along); a surface
+/// point's or a silhouette vertex's.
+pub(super) struct Row {
+    pub(super) surface: bool,
+    pub(super) r: f32,
+    pub(super) w: f32,
+    pub(super) vertices: [u32; 3],
+    pub(super) blend: [f32; 3],
+    pub(super) dir: Vec3,
+}
+
+impl Row {
+    /// The row's skin point's motion, of per-vertex motions `c`.
+    pub(super) fn at(&self, c: &[Vec3]) -> Vec3 {
+        let [a, b, d] = self.vertices.map(|v| c[v as usize]);
+        a * self.blend[0] + b * self.blend[1] + d * self.blend[2]
+    }
+}
+
+/// What the residuals are computed from.
+pub(super) struct Problem<'a> {
+    pub(super) model: &'a BodyModel,
+    pub(super) view: &'a AveragedView,
+    pub(super) points: Vec<Vec3>,
+    /// Where each point is seen (pixel).
+    pub(super) pixels: Vec<(f32, f32)>,
+    pub(super) outside: OutsideDistance,
+    /// Per body vertex, the triangles it is a corner of.
+    pub(super) faces_of: &'a [Vec<u32>],
+    pub(super) settings: &'a FitSettings,
+}
+
+/// Per vertex of `count`, the triangles of `triangles` it is a corner of.
+pub(super) fn faces_of(count: usize, triangles: &[[u32; 3]]) -> Vec<Vec<u32>> {
+    let mut out = vec![Vec::new(); count];
+    for (f, t) in triangles.iter().enumerate() {
+        for &v in t {
+            if let Some(list) = out.get_mut(v as usize) {
+                list.push(f as u32);
+            }
+        }
+    }
+    out
+}
+
+impl Problem<'_> {
+    /// The triangle at vertex `i` that `p` lies over (its projection inside; the nearest
+    /// plane of those): its normal, corners and `p`'s projection's barycentric weights. A
+    /// point over none of them (off the skin: a limb the pose has not reached yet) is held
+    /// against the vertex's tangent plane: the plane of a triangle it is not over can pass
+    /// near it at any slant.
+    fn face_under(
+        &self,
+        body: &PosedBody,
+        normals: &[Vec3],
+        i: u32,
+        p: Vec3,
+    ) -> (Vec3, [u32; 3], [f32; 3]) {
+        let v = &body.vertices;
+        let mut best: Option<(f32, Vec3, [u32; 3], [f32; 3])> = None;
+        for &f in self
+            .faces_of
+            .get(i as usize)
+            .map_or(&[][..], |l| l.as_slice())
+        {
+            let t = self.model.triangles[f as usize];
+            let [a, b, c] = t.map(|k| v[k as usize]);
+            let cross = (b - a).cross(c - a);
+            let area2 = cross.length_squared();
+            if area2 <= 0.0 {
+                continue;
+            }
+            let n = cross / area2.sqrt();
+            let d = n.dot(p - a);
+            let q = p - n * d;
+            // Barycentric weights of q from the sub-triangles' signed areas.
+            let wa = (b - q).cross(c - q).dot(cross) / area2;
+            let wb = (c - q).cross(a - q).dot(cross) / area2;
+            let wc = 1.0 - wa - wb;
+            if wa < -1e-4 || wb < -1e-4 || wc < -1e-4 {
+                continue;
+            }
+            if best.is_none_or(|(s, ..)| d.abs() < s) {
+                best = Some((d.abs(), n, t, [wa, wb, wc]));
+            }
+        }
+        match best {
+            Some((_, n, t, blend)) => (n, t, blend),
+            None => (normals[i as usize], [i; 3], [1.0, 0.0, 0.0]),
+        }
+    }
+
+    /// The residual rows of `body`: the surface points, then the silhouette.
+    pub(super) fn rows(&self, body: &PosedBody) -> Vec<Row> {
+        let s = self.settings;
+        let normals = compute_normals(&body.vertices, &self.model.triangles);
+        // Skin the camera can see: turned towards it.
+        let facing: Vec<bool> = body
+            .vertices
+            .iter()
+            .zip(&normals)
+            .map(|(v, n)| n.dot(v.normalize_or_zero()) < -0.05)
+            .collect();
+        // The visible skin binned by where it is seen, in tiles of TILE pixels: a point's
+        // partner is looked for among the skin seen in its tile and the ones around it.
+        let cam = &self.view.camera;
+        let (tw, th) = (WIDTH.div_ceil(TILE), HEIGHT.div_ceil(TILE));
+        let mut tiles: Vec<Vec<u32>> = vec![Vec::new(); tw * th];
+        let tile_of = |u: f32, v: f32| -> Option<(usize, usize)> {
+            let (tu, tv) = ((u / TILE as f32).floor(), (v / TILE as f32).floor());
+            ((0.0..tw as f32).contains(&tu) && (0.0..th as f32).contains(&tv))
+                .then_some((tu as usize, tv as usize))
+        };
+        let mut seen_at = vec![None; body.vertices.len()];
+        for (i, v) in body.vertices.iter().enumerate() {
+            if !facing[i] {
+                continue;
+            }
+            let Some(px) = cam.project(*v) else {
+                continue;
+            };
+            seen_at[i] = Some(px);
+            if let Some((tu, tv)) = tile_of(px.x, px.y) {
+                tiles[tv * tw + tu].push(i as u32);
+            }
+        }
+        let huber = |r: f32| {
+            let a = r.abs();
+            if a <= s.robust_m { 1.0 } else { s.robust_m / a }
+        };
+        let mut rows = Vec::with_capacity(self.points.len() + 2000);
+        let reach2 = s.reach_m * s.reach_m;
+        for (&p, &(pu, pv)) in self.points.iter().zip(&self.pixels) {
+            let Some((tu, tv)) = tile_of(pu, pv) else {
+                continue;
+            };
+            let mut best: Option<(f32, u32)> = None;
+            for y in tv.saturating_sub(1)..(tv + 2).min(th) {
+                for x in tu.saturating_sub(1)..(tu + 2).min(tw) {
+                    for &i in &tiles[y * tw + x] {
+                        let d2 = body.vertices[i as usize].distance_squared(p);
+                        if d2 <= reach2 && best.is_none_or(|(b, bi)| d2 < b || (d2 == b && i < bi))
+                        {
+                            best = Some((d2, i));
+                        }
+                    }
+                }
+            }
+            let Some((_, i)) = best else {
+                continue;
+            };
+            // The point against the skin's triangle it lies over (the camera films the
+            // triangles: against the nearest vertex's tangent plane, every point of a convex
+            // patch lies inside it, and the fit shrank the body: on exact depth, from the
+            // true shape, chest -0.3 cm, hip -0.7 cm).
+            let (n, vertices, blend) = self.face_under(body, &normals, i, p);
+            let r = n.dot(p - body.vertices[i as usize]);
+            // The residual is the point minus the skin: moving the skin along n lowers it.
+            rows.push(Row {
+                surface: true,
+                r: -r,
+                w: huber(r) * if r > 0.0 { s.outside_weight } else { 1.0 },
+                vertices,
+                blend,
+                dir: n,
+            });
+        }
+        // Skin below the floor, pushed up: the tracker's pixels lose the soles with the
+        // floor, and without them nothing held the feet (through the tracker the bodies
+        // came out 1 cm tall, the legs reaching into the floor).
+        if let Some(floor) = self.view.floor {
+            for (j, v) in body.vertices.iter().enumerate() {
+                let below = -floor.height(*v);
+                if below > 0.0 {
+                    rows.push(Row {
+                        surface: false,
+                        r: below,
+                        w: huber(below),
+                        vertices: [j as u32; 3],
+                        blend: [1.0, 0.0, 0.0],
+                        // Rows grow along `dir` (as the surface's and silhouette's): down.
+                        dir: -floor.normal,
+                    });
+                }
+            }
+        }
+        // Visible skin outside the person's pixels, pulled back in.
+        for (j, v) in body.vertices.iter().enumerate() {
+            let Some(px) = seen_at[j] else {
+                continue;
+            };
+            let Some((d, grad)) = self.outside.at(px.x, px.y) else {
+                continue;
+            };
+            // A pixel of slack: the mask's edge flickers and the skin's edge is sampled.
+            if d <= 1.0 {
+                continue;
+            }
+            // Only where the scene shows free space in front of the skin: a reading behind
+            // it (the wall through the gap). A surface at the skin's depth is the person
+            // left out of the mask (the soles, cut off with the floor); no reading says
+            // nothing (the Kinect loses the body's edges and the projector's shadow beside
+            // them: taken as free space, the tracker's mask, which leaves them out, made
+            // every girth 1-2 cm small).
+            let (u, vv) = (px.x.round() as usize, px.y.round() as usize);
+            let scene = self.view.scene_m[vv * WIDTH + u];
+            if scene <= 0.0 || scene < v.z + FREE_M {
+                continue;
+            }
+            let metres = (d - 1.0) * v.z / cam.fx;
+            let dir = Vec3::new(-grad.x, -grad.y, 0.0).normalize_or_zero();
+            rows.push(Row {
+                surface: false,
+                r: metres,
+                w: s.silhouette_weight * huber(metres),
+                vertices: [j as u32; 3],
+                blend: [1.0, 0.0, 0.0],
+                dir,
+            });
+        }
+        rows
+    }
+
+    /// The data term of `rows`.
+    pub(super) fn cost(&self, rows: &[Row]) -> f64 {
+        let c = self.settings.robust_m;
+        rows.iter()
+            .map(|r| {
+                let a = r.r.abs();
+                let scale = r.w.max(0.0) / if a <= c { 1.0 } else { c / a };
+                let loss = if a <= c {
+                    0.5 * a * a
+                } else {
+                    c * (a - 0.5 * c)
+                };
+                f64::from(scale * loss)
+            })
+            .sum()
+    }
+}
