@@ -396,7 +396,11 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
     }
     match options.mode {
         Mode::Kiosk { .. } => {
-            app.add_plugins((kiosk::ui::OverlayPlugin, body_panel::BodyPanelPlugin));
+            app.add_plugins((
+                kiosk::ui::OverlayPlugin,
+                kiosk::guide::PoseGuidePlugin,
+                body_panel::BodyPanelPlugin,
+            ));
             if !matches!(options.sensor, sensors::SensorSpec::Bvh(_)) {
                 app.add_plugins(kiosk::depth_view::DepthViewPlugin);
             }

@@ -1,6 +1,7 @@
 //! `fitroom measure`: measuring people from depth. `prior` learns the shape prior from ANSUR
 //! II, `eval` measures ANSUR II subjects filmed by the synthetic Kinect with both methods,
-//! `plot` draws an evaluation's error distributions.
+//! `plot` draws an evaluation's error distributions, `record` films a calibration into a
+//! dump and `dump` measures the person in one.
 
 use std::fmt::Write as _;
 use std::path::PathBuf;
@@ -26,6 +27,12 @@ pub enum MeasureCommand {
     Eval(EvalArgs),
     /// Plot the error distributions of an evaluation's JSON report (`eval --report`).
     Plot(PlotArgs),
+    /// Film a held-out ANSUR II subject's calibration (a second facing the sensor, a second
+    /// turned) with the synthetic Kinect into a fakenect dump, the truth beside it.
+    Record(super::measure_dump::RecordArgs),
+    /// Measure the person in a dump (a Kinect recording or `measure record`'s): the frames go
+    /// through the tracker and the calibration's checks as in the kiosk.
+    Dump(super::measure_dump::DumpArgs),
 }
 
 #[derive(clap::Args)]
@@ -111,6 +118,8 @@ pub fn run(command: MeasureCommand) -> Result<()> {
         MeasureCommand::Prior(args) => prior(args),
         MeasureCommand::Eval(args) => eval(args),
         MeasureCommand::Plot(args) => plot(args),
+        MeasureCommand::Record(args) => super::measure_dump::record_calibration(args),
+        MeasureCommand::Dump(args) => super::measure_dump::measure_dump(args),
     }
 }
 
@@ -140,7 +149,7 @@ fn bar(total: usize, what: &str) -> indicatif::ProgressBar {
 }
 
 /// Both survey files, women then men, as one list (each file's own order kept).
-fn survey(data: &std::path::Path) -> Result<Vec<fitroom_body::ansur::AnsurSubject>> {
+pub(super) fn survey(data: &std::path::Path) -> Result<Vec<fitroom_body::ansur::AnsurSubject>> {
     let [women, men] = read_survey(data)
         .with_context(|| format!("cannot read the ANSUR II survey in '{}'", data.display()))?;
     Ok(women.into_iter().chain(men).collect())
@@ -178,7 +187,7 @@ fn prior(args: PriorArgs) -> Result<()> {
     Ok(())
 }
 
-fn chart(name: &str) -> Result<SizeChart> {
+pub(super) fn chart(name: &str) -> Result<SizeChart> {
     let path = crate::assets::assets_dir()?.join("sizecharts").join(name);
     SizeChart::load(&path)
         .with_context(|| format!("cannot read the size chart '{}'", path.display()))

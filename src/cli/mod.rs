@@ -15,6 +15,7 @@ pub mod body;
 pub mod cloth;
 pub mod import;
 pub mod measure;
+pub mod measure_dump;
 pub mod measure_plot;
 pub mod motion;
 pub mod sensor;

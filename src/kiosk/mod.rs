@@ -310,5 +310,6 @@ pub fn snap_camera(world: &mut World) {
 
 pub mod config;
 pub mod depth_view;
+pub mod guide;
 pub mod measure;
 pub mod ui;

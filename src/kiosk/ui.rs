@@ -83,18 +83,10 @@ fn status_overlay(
                     "D: show the sensor skeletons"
                 });
                 if *state.get() == KioskState::Calibrate {
-                    match calibration.as_ref().map(|c| (c, &c.status)) {
-                        Some((c, CalibrationStatus::Collecting { view, hint, .. })) => {
-                            ui.add(egui::ProgressBar::new(c.progress()).text(if *view == 0 {
-                                "measuring: face the mirror, stand still, arms a little away"
-                            } else {
-                                "measuring: turned halfway to your left, stand still"
-                            }));
-                            if let Some(hint) = hint {
-                                ui.colored_label(egui::Color32::from_rgb(230, 160, 60), hint);
-                            }
-                        }
-                        Some((_, CalibrationStatus::Fitting)) => {
+                    match calibration.as_ref().map(|c| &c.status) {
+                        // The pose guide (`guide.rs`) shows the progress and the hint.
+                        Some(CalibrationStatus::Collecting { .. }) => {}
+                        Some(CalibrationStatus::Fitting) => {
                             ui.label("measuring: fitting your body…");
                         }
                         _ => {

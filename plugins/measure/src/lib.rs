@@ -16,6 +16,7 @@
 //!
 //! # Where things are
 //!
+//! - `calibration`: the calibration's views collected from tracked frames, each checked;
 //! - `view`: the calibration frames and their per-pixel average;
 //! - `seed`: the seed's method;
 //! - `posed`: the shape space, the posed body and how its skin moves with each slider;
@@ -28,6 +29,7 @@
 //! - `plugin` (feature `plugin`): the Bevy adapter that measures the person while the kiosk
 //!   calibrates.
 
+pub mod calibration;
 pub mod eval;
 pub mod fit;
 pub mod garment_size;

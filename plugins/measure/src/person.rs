@@ -17,10 +17,40 @@ pub struct PersonMeasurement {
     pub estimate: BodyEstimate,
     /// The other gender's fit's cost (the kept one's is `estimate.cost`).
     pub other_cost: f64,
+    /// Whether the turned view was left out: the fit could not match it (its points' RMS
+    /// more than [`TURNED_RMS_RATIO`] times the front's), so the front was fitted alone.
+    pub turned_dropped: bool,
 }
 
-/// Fits `views` with both priors (at once when `settings.threads` ≥ 2) and keeps the better.
+/// A turned view whose points' RMS is this many times the front view's is not trusted (the
+/// tracker lost the turned person, or placed them wrong): the front is measured alone.
+pub const TURNED_RMS_RATIO: f32 = 1.5;
+
+/// Fits `views` with both priors (at once when `settings.threads` ≥ 2) and keeps the better;
+/// again on the front view alone if the fit could not match the others.
 pub fn measure_person(
+    model: &BodyModel,
+    views: &[ViewPose],
+    prior: &ShapePrior,
+    settings: &FitSettings,
+) -> Result<PersonMeasurement, MeasureError> {
+    let both = both_genders(model, views, prior, settings)?;
+    let rms = &both.estimate.view_rms_m;
+    let suspect = rms.len() > 1
+        && rms[1..]
+            .iter()
+            .any(|r| *r > TURNED_RMS_RATIO * rms[0].max(1e-4));
+    if !suspect {
+        return Ok(both);
+    }
+    Ok(PersonMeasurement {
+        turned_dropped: true,
+        ..both_genders(model, &views[..1], prior, settings)?
+    })
+}
+
+/// Fits `views` with both priors and keeps the better.
+fn both_genders(
     model: &BodyModel,
     views: &[ViewPose],
     prior: &ShapePrior,
@@ -57,5 +87,6 @@ pub fn measure_person(
         female,
         estimate,
         other_cost,
+        turned_dropped: false,
     })
 }

@@ -13,17 +13,15 @@ use bevy::prelude::*;
 use fitroom_body::plugin::{AvatarBody, AvatarShape};
 use fitroom_body::{Measure, Measurements, Shape};
 use fitroom_depth::plugin::DepthFeed;
-use fitroom_depth::{HEIGHT, WIDTH};
 use fitroom_schedule::FitroomSystems;
 use fitroom_tracker::plugin::{TrackedSkeleton, UserMap};
 
 use crate::MeasureError;
+use crate::calibration::{Collector, Progress};
 use crate::fit::{FitSettings, ViewPose};
 use crate::person::{PersonMeasurement, measure_person};
-use crate::posed::Placement;
 use crate::prior::ShapePrior;
-use crate::tracked::{calibration_frame, tracked_placement, tracked_views};
-use crate::view::CalibrationFrame;
+use crate::tracked::tracked_views;
 
 /// Systems of the measurement plugin.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
@@ -33,9 +31,10 @@ pub enum MeasureSystems {
 }
 
 /// Where the calibration is.
-#[derive(Clone, Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq, Default)]
 pub enum CalibrationStatus {
     /// Not measuring (nobody to measure, or the kiosk is not calibrating).
+    #[default]
     Idle,
     /// Collecting good frames of view `view` of `views` (0: facing the sensor, 1: turned
     /// to the side): how many of how many, and, when the last frame was not good, what the
@@ -76,100 +75,42 @@ type Fit = (
     usize,
 );
 
-/// One view collected: its frames and where the body stood in the last of them.
-type View = (Vec<CalibrationFrame>, Placement);
-
 /// The calibration's state; the kiosk calls [`Calibration::start`] and [`Calibration::stop`].
 ///
 /// The person stands facing the mirror for a second, then turns halfway to their side and
-/// holds still for another: the side view shows the depth of the chest, waist and hips that
-/// the front cannot (on 200 subjects the chest's error fell by a third; `docs/measure.md`).
-#[derive(Resource)]
+/// holds still for another ([`Collector`]): the side view shows the depth of the chest,
+/// waist and hips that the front cannot (`docs/measure.md`).
+#[derive(Resource, Default)]
 pub struct Calibration {
     pub status: CalibrationStatus,
-    /// Good frames needed per view (one second at 30 Hz).
-    pub need: usize,
-    /// Views to collect: 2 (front, then turned), or 1 (the front alone).
-    pub views: usize,
-    /// The turned view's turn from the front one, degrees: at least, at most.
-    pub turn_deg: (f32, f32),
-    /// Largest move of a joint over the collected frames, metres: more is not standing still.
-    pub still_m: f32,
+    /// The views being collected (and how).
+    pub collector: Collector,
     /// Why the last fit failed, if it did (the collection then starts again).
     pub last_error: Option<String>,
     active: bool,
-    frames: Vec<CalibrationFrame>,
-    pose: Option<Placement>,
-    done: Vec<View>,
     last_frame: u64,
     job: Option<Fit>,
-}
-
-impl Default for Calibration {
-    fn default() -> Self {
-        Self {
-            status: CalibrationStatus::Idle,
-            need: 30,
-            views: 2,
-            turn_deg: (25.0, 75.0),
-            still_m: 0.05,
-            last_error: None,
-            active: false,
-            frames: Vec::new(),
-            pose: None,
-            done: Vec::new(),
-            last_frame: 0,
-            job: None,
-        }
-    }
 }
 
 impl Calibration {
     /// Starts measuring the person in view (again).
     pub fn start(&mut self) {
         self.active = true;
-        self.frames.clear();
-        self.pose = None;
-        self.done.clear();
+        self.collector.clear();
         self.last_error = None;
-        self.status = self.collecting(0, None);
+        self.status = self.collector.collecting(0, None).into();
     }
 
     /// Stops (the person left); a fit under way is let go.
     pub fn stop(&mut self) {
         self.active = false;
-        self.frames.clear();
-        self.pose = None;
-        self.done.clear();
+        self.collector.clear();
         self.job = None;
         self.status = CalibrationStatus::Idle;
     }
 
     pub fn is_active(&self) -> bool {
         self.active
-    }
-
-    /// The whole collection starts again (from the front view), and says why.
-    fn restart(&mut self, hint: impl Into<String>) {
-        self.done.clear();
-        self.restart_view(hint);
-    }
-
-    /// The view being collected starts again, and says why.
-    fn restart_view(&mut self, hint: impl Into<String>) {
-        self.frames.clear();
-        self.pose = None;
-        self.status = self.collecting(0, Some(hint.into()));
-    }
-
-    fn collecting(&self, frames: usize, hint: Option<String>) -> CalibrationStatus {
-        CalibrationStatus::Collecting {
-            view: self.done.len(),
-            views: self.views.max(1),
-            frames,
-            need: self.need,
-            hint,
-        }
     }
 
     /// The share of the calibration's frames collected, 0..1 (over all its views).
@@ -184,6 +125,27 @@ impl Calibration {
             } => (view * need + frames) as f32 / (views * need).max(1) as f32,
             CalibrationStatus::Fitting | CalibrationStatus::Done => 1.0,
             CalibrationStatus::Idle => 0.0,
+        }
+    }
+}
+
+impl From<Progress> for CalibrationStatus {
+    fn from(p: Progress) -> Self {
+        match p {
+            Progress::Collecting {
+                view,
+                views,
+                frames,
+                need,
+                hint,
+            } => Self::Collecting {
+                view,
+                views,
+                frames,
+                need,
+                hint,
+            },
+            Progress::Complete => Self::Fitting,
         }
     }
 }
@@ -216,47 +178,6 @@ impl Plugin for MeasurePlugin {
     }
 }
 
-/// What the person is asked to do for the turned view.
-pub const TURN_HINT: &str = "Now turn halfway to your left and hold still";
-
-/// How far `a` is turned from `b` about the vertical, degrees.
-fn turn_between(a: &Placement, b: &Placement) -> f32 {
-    let f = (a.rotation * b.rotation.inverse()) * Vec3::Z;
-    f.x.atan2(f.z).abs().to_degrees()
-}
-
-/// Why a tracked frame is not a calibration frame, if it is not. In the turned view the
-/// far arm may be hidden behind the body: only the front view needs every joint.
-fn frame_problem(
-    map: &UserMap,
-    tracked: &fitroom_tracker::Tracked,
-    front: bool,
-) -> Option<&'static str> {
-    let person = map.person.as_ref()?;
-    if person.people > 1 {
-        return Some("Two people in view: one at a time, please");
-    }
-    let [left, top, right, bottom] = person.bbox.map(usize::from);
-    if top <= 1 {
-        return Some("Your head is out of view: please step back");
-    }
-    if bottom + 2 >= HEIGHT {
-        return Some("Your feet are out of view: please step back");
-    }
-    if left <= 1 || right + 2 >= WIDTH {
-        return Some("Please step to the middle");
-    }
-    if front
-        && tracked
-            .joints
-            .iter()
-            .any(|j| j.confidence != fitroom_tracker::Confidence::Tracked)
-    {
-        return Some("Hold your arms a little away from your body");
-    }
-    None
-}
-
 fn collect(
     depth: Option<Res<DepthFeed>>,
     map: Res<UserMap>,
@@ -278,62 +199,23 @@ fn collect(
     let Some(frame) = depth.latest.as_ref() else {
         return;
     };
-    let Some(tracked) = skeleton.latest.as_ref() else {
-        cal.restart("Step in front of the mirror");
+    let progress = cal.collector.offer(frame, skeleton.latest.as_ref());
+    let complete = progress == Progress::Complete;
+    cal.status = progress.into();
+    if !complete {
+        return;
+    }
+    let Some(seen) = cal.collector.take_views() else {
         return;
     };
-    let front = cal.done.is_empty();
-    if let Some(problem) = frame_problem(&map, tracked, front) {
-        cal.restart_view(problem);
-        return;
-    }
-    let pose = tracked_placement(tracked);
-    if let Some((_, first)) = cal.done.first() {
-        let turn = turn_between(&pose, first);
-        if turn < cal.turn_deg.0 {
-            cal.restart_view(TURN_HINT);
-            return;
-        }
-        if turn > cal.turn_deg.1 {
-            cal.restart_view("Not so far: turn back a little towards the mirror");
-            return;
-        }
-    }
-    let f = calibration_frame(frame, tracked);
-    if let Some(first) = cal.frames.first() {
-        let moved = f
-            .joints
-            .iter()
-            .zip(&first.joints)
-            .map(|(a, b)| a.distance(*b))
-            .fold(0.0, f32::max);
-        if moved > cal.still_m {
-            cal.restart_view("Please stand still for a second");
-            return;
-        }
-    }
-    cal.pose = Some(pose);
-    cal.frames.push(f);
-    let frames = cal.frames.len();
-    cal.status = cal.collecting(frames, None);
-    if frames < cal.need {
-        return;
-    }
-    let Some(placement) = cal.pose.take() else {
-        return;
-    };
-    let view = (std::mem::take(&mut cal.frames), placement);
-    cal.done.push(view);
-    if cal.done.len() < cal.views.max(1) {
-        cal.status = cal.collecting(0, Some(TURN_HINT.into()));
-        return;
-    }
     let Ok(prior) = prior.0.clone() else {
-        cal.restart("The measurement is not available (no shape prior)");
+        cal.status = cal
+            .collector
+            .restart("The measurement is not available (no shape prior)")
+            .into();
         return;
     };
     let model = body.model.clone();
-    let seen = std::mem::take(&mut cal.done);
     let count = seen.iter().map(|(f, _)| f.len()).sum();
     let job = std::thread::spawn(move || {
         let seen = tracked_views(&model, &seen)?;
@@ -376,7 +258,10 @@ fn finish(mut commands: Commands, mut cal: ResMut<Calibration>, mut shape: ResMu
         Err(e) => {
             warn!("the measurement failed: {e}");
             cal.last_error = Some(e.to_string());
-            cal.restart(format!("Measuring again ({e})"));
+            cal.status = cal
+                .collector
+                .restart(format!("Measuring again ({e})"))
+                .into();
         }
     }
 }

@@ -13,10 +13,9 @@ use fitroom_body::{BodyModel, Shape};
 use fitroom_depth::DepthFrame;
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_depth::synthetic::NoiseSettings;
+use fitroom_measure::calibration::TURN_HINT;
 use fitroom_measure::eval::{Recording, Stance, TURN_DEG, record};
-use fitroom_measure::plugin::{
-    BodyMeasurements, Calibration, CalibrationStatus, MeasurePlugin, TURN_HINT,
-};
+use fitroom_measure::plugin::{BodyMeasurements, Calibration, CalibrationStatus, MeasurePlugin};
 use fitroom_sensor::plugin::SensorFeed;
 use fitroom_tracker::plugin::TrackerPlugin;
 

@@ -85,6 +85,12 @@ pub struct SubjectResult {
     pub fit_ms: f64,
     /// The size of the garment worn, if one was.
     pub garment_size: Option<String>,
+    /// Each view's points' RMS at the end (clamped), mm; whether the turned view was left
+    /// out ([`crate::person::TURNED_RMS_RATIO`]).
+    #[serde(default)]
+    pub view_rms_mm: Vec<f32>,
+    #[serde(default)]
+    pub turned_dropped: bool,
     pub error: Option<String>,
 }
 
@@ -245,6 +251,8 @@ fn one(
         size_ours: None,
         fit_ms: 0.0,
         garment_size: None,
+        view_rms_mm: Vec::new(),
+        turned_dropped: false,
         error: None,
     };
     let request = FitRequest {
@@ -253,6 +261,7 @@ fn one(
         targets: s.measurements.clone(),
     };
     let mut garment_size: Option<String> = None;
+    let mut views_seen: (Vec<f32>, bool) = (Vec::new(), false);
     let mut run =
         || -> Result<(Measurements, Measurements, seed::SeedMeasurement, bool, f64), String> {
             let shape = fit(model, &request, &FitOptions::default())
@@ -342,6 +351,10 @@ fn one(
             let ms = began.elapsed().as_secs_f64() * 1e3;
             // The seed measures the front view.
             let theirs = seed::measure(&front).map_err(|e| e.to_string())?;
+            views_seen = (
+                ours.estimate.view_rms_m.iter().map(|r| r * 1e3).collect(),
+                ours.turned_dropped,
+            );
             Ok((truth, ours.estimate.measurements, theirs, ours.female, ms))
         };
     match run() {
@@ -361,6 +374,7 @@ fn one(
         Err(e) => result.error = Some(e),
     }
     result.garment_size = garment_size;
+    (result.view_rms_mm, result.turned_dropped) = views_seen;
     result
 }
 

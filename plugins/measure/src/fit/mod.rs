@@ -97,6 +97,9 @@ pub struct BodyEstimate {
     pub placements: Vec<Placement>,
     /// Root mean square of the surface points' distances at the end, metres.
     pub rms_m: f32,
+    /// The same per view, each distance clamped at [`VIEW_RMS_CLAMP_M`] (a view the fit
+    /// could not match shows as one much worse than the others).
+    pub view_rms_m: Vec<f32>,
     /// The fit's final cost (data and prior): what compares two fits of the same frames.
     pub cost: f64,
     /// Per measure, one standard deviation, cm: the sliders' posterior covariance (the
@@ -136,6 +139,9 @@ pub const REFINED: [&str; 15] = [
     "foot_l",
     "foot_r",
 ];
+
+/// Distances clamped at this for [`BodyEstimate::view_rms_m`], metres.
+pub const VIEW_RMS_CLAMP_M: f32 = 0.03;
 
 /// Points fewer than this cannot say much about a body.
 const MIN_POINTS: usize = 500;
@@ -421,11 +427,24 @@ pub fn fit_body(
         .flat_map(|s| s.rows.iter().filter(|r| r.surface).map(|r| r.r))
         .collect();
     let rms_m = (surface.iter().map(|r| r * r).sum::<f32>() / surface.len().max(1) as f32).sqrt();
+    let view_rms_m = states
+        .iter()
+        .map(|s| {
+            let r: Vec<f32> = s
+                .rows
+                .iter()
+                .filter(|r| r.surface)
+                .map(|r| r.r.abs().min(VIEW_RMS_CLAMP_M))
+                .collect();
+            (r.iter().map(|v| v * v).sum::<f32>() / r.len().max(1) as f32).sqrt()
+        })
+        .collect();
     Ok(BodyEstimate {
         shape,
         measurements,
         placements: states.iter().map(|s| s.place).collect(),
         rms_m,
+        view_rms_m,
         cost,
         uncertainty_cm,
         points: points_total,
