@@ -57,12 +57,7 @@ pub fn plot_errors(report: &MeasureReport, path: &Path) -> Result<()> {
     if ours.iter().all(|r| r.errors.is_empty()) {
         bail!("no subject was measured: nothing to plot");
     }
-    plotters::style::register_font(
-        "sans-serif",
-        FontStyle::Normal,
-        epaint_default_fonts::UBUNTU_LIGHT,
-    )
-    .map_err(|_| anyhow::anyhow!("cannot load the plot font"))?;
+    crate::cli::plot_font()?;
     let draw = |e: DrawingAreaErrorKind<_>| anyhow::anyhow!("cannot draw the plot: {e:?}");
     let root = BitMapBackend::new(path, (1500, 620)).into_drawing_area();
     root.fill(&WHITE).map_err(draw)?;

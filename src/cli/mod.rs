@@ -170,6 +170,17 @@ pub enum Noise {
     Kinect,
 }
 
+/// Registers the plots' font (egui's Ubuntu Light, already a dependency) as "sans-serif";
+/// every `--plot` calls it first.
+pub fn plot_font() -> anyhow::Result<()> {
+    plotters::style::register_font(
+        "sans-serif",
+        plotters::style::FontStyle::Normal,
+        epaint_default_fonts::UBUNTU_LIGHT,
+    )
+    .map_err(|_| anyhow::anyhow!("cannot load the plot font"))
+}
+
 #[cfg(test)]
 mod tests {
     use clap::CommandFactory;

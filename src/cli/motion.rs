@@ -149,12 +149,7 @@ pub const PLOT_JOINT: (KinectJoint, KinectJoint) =
 
 /// Draws raw, filtered and clean curves of the right elbow angle over time.
 pub fn plot_joint_angle(evaluation: &ClipEvaluation, path: &Path) -> Result<()> {
-    plotters::style::register_font(
-        "sans-serif",
-        FontStyle::Normal,
-        epaint_default_fonts::UBUNTU_LIGHT,
-    )
-    .map_err(|_| anyhow!("cannot load the plot font"))?;
+    crate::cli::plot_font()?;
     let (joint, child) = PLOT_JOINT;
     let series = |frames: &[fitroom_sensor::SensorFrame]| -> Vec<(f64, f64)> {
         let t0 = frames.first().map_or(0.0, |f| f.timestamp_s);

@@ -4,7 +4,9 @@
 //! skin moves with each slider.
 
 use fitroom_body::fit::{Param, REGIONS, SLIDERS};
-use fitroom_body::{BodyModel, RestPose, Shape, ShapeError, forward_kinematics, skin_positions};
+use fitroom_body::{
+    BodyModel, RestPose, RigidTransform, Shape, ShapeError, forward_kinematics, skin_positions,
+};
 use glam::{Quat, Vec3};
 
 use fitroom_sensor::KinectJoint;
@@ -157,11 +159,7 @@ impl<'a> Posing<'a> {
         bones: &[usize],
     ) -> Vec<Vec<Vec3>> {
         let m = self.model;
-        let globals = forward_kinematics(&m.bones, &body.rest, &self.locals, Vec3::ZERO);
-        let pelvis = globals
-            .get(self.root)
-            .map(|g| g.translation)
-            .unwrap_or(Vec3::ZERO);
+        let (globals, pelvis) = self.globals(&body.rest);
         let mut out = Vec::with_capacity(bones.len() * 3);
         for &b in bones {
             // Which bones the turn carries: `b` and every bone below it.
@@ -223,11 +221,22 @@ impl<'a> Posing<'a> {
         }
     }
 
+    /// Each bone's transform in this pose (model space, the rig's root where the rig has it),
+    /// and the pelvis's position among them: what placing anchors.
+    fn globals(&self, rest: &RestPose) -> (Vec<RigidTransform>, Vec3) {
+        let globals = forward_kinematics(&self.model.bones, rest, &self.locals, Vec3::ZERO);
+        let pelvis = globals
+            .get(self.root)
+            .map(|g| g.translation)
+            .unwrap_or(Vec3::ZERO);
+        (globals, pelvis)
+    }
+
     /// The body vertices of the morphed mesh `positions` (model space, at rest) posed and
     /// placed.
     fn place(&self, positions: &[Vec3], rest: &RestPose, placement: &Placement) -> Vec<Vec3> {
         let m = self.model;
-        let globals = forward_kinematics(&m.bones, rest, &self.locals, Vec3::ZERO);
+        let (globals, pelvis) = self.globals(rest);
         let n = (m.body_vertex_count as usize).min(positions.len());
         let skinned = skin_positions(
             &positions[..n],
@@ -236,10 +245,6 @@ impl<'a> Posing<'a> {
             rest,
             &globals,
         );
-        let pelvis = globals
-            .get(self.root)
-            .map(|g| g.translation)
-            .unwrap_or(Vec3::ZERO);
         skinned
             .into_iter()
             .map(|p| placement.pelvis + placement.rotation * (p - pelvis))
@@ -254,11 +259,7 @@ impl<'a> Posing<'a> {
         placement: &Placement,
     ) -> [Vec3; KinectJoint::COUNT] {
         let m = self.model;
-        let globals = forward_kinematics(&m.bones, &body.rest, &self.locals, Vec3::ZERO);
-        let pelvis = globals
-            .get(self.root)
-            .map(|g| g.translation)
-            .unwrap_or(Vec3::ZERO);
+        let (globals, pelvis) = self.globals(&body.rest);
         let head = |name: &str| {
             m.bone_index(name)
                 .and_then(|b| globals.get(b))

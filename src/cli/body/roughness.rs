@@ -21,12 +21,7 @@ pub fn roughness(model: &BodyModel) -> Result<RoughnessStudy> {
 /// second, both), one line per propagation depth.
 pub fn plot_roughness(study: &RoughnessStudy, path: &Path) -> Result<()> {
     use plotters::prelude::*;
-    plotters::style::register_font(
-        "sans-serif",
-        FontStyle::Normal,
-        epaint_default_fonts::UBUNTU_LIGHT,
-    )
-    .map_err(|_| anyhow::anyhow!("cannot load the plot font"))?;
+    crate::cli::plot_font()?;
     let draw = |e: DrawingAreaErrorKind<_>| anyhow::anyhow!("cannot draw the plot: {e:?}");
     let root = BitMapBackend::new(path, (1500, 520)).into_drawing_area();
     root.fill(&WHITE).map_err(draw)?;
