@@ -145,72 +145,61 @@ impl<'a> Posing<'a> {
         locals
     }
 
-    /// How the posed vertices of `body` move per radian of turn of each of `bones` about
-    /// each model axis (three columns per bone). A turn of bone `b` about its head `h` (as
-    /// [`Self::turned`] makes it) carries the bone and its children: a vertex moves by
-    /// `w (a × (v - h))`, `w` its skin weight on `b` and below and `a` the axis in sensor
-    /// space. (Exact where a vertex's weights are all on one side of the bone; near the joint
-    /// the blend of the two sides is taken as one point. Finite differences gave the same
-    /// fits at four times the cost: 45 skinnings per view per step.)
-    pub fn pose_jacobian(
-        &self,
-        body: &PosedBody,
-        placement: &Placement,
-        bones: &[usize],
-    ) -> Vec<Vec<Vec3>> {
+    /// Per body vertex (of `count`), per bone of `bones`, the vertex's skin weight that a
+    /// turn of the bone carries: its weight on the bone and on every bone below it.
+    /// Vertex-major (`[vertex * bones.len() + k]`); it depends on the rig only.
+    pub fn carried_weights(&self, bones: &[usize], count: usize) -> Vec<f32> {
         let m = self.model;
-        let (globals, pelvis) = self.globals(&body.rest);
-        let mut out = Vec::with_capacity(bones.len() * 3);
-        for &b in bones {
-            // Which bones the turn carries: `b` and every bone below it.
-            let carried: Vec<bool> = (0..m.bones.len())
-                .map(|mut j| {
-                    loop {
-                        if j == b {
-                            break true;
-                        }
-                        match m.bones[j].parent {
-                            Some(p) => j = p,
-                            None => break false,
-                        }
-                    }
-                })
-                .collect();
-            let head = globals.get(b).map_or(placement.pelvis, |g| {
-                placement.pelvis + placement.rotation * (g.translation - pelvis)
-            });
-            let weight: Vec<f32> = m
-                .skin_joints
-                .iter()
-                .zip(&m.skin_weights)
-                .take(body.vertices.len())
-                .map(|(joints, weights)| {
-                    joints
-                        .iter()
-                        .zip(weights)
-                        .filter(|(j, _)| carried.get(usize::from(**j)).copied().unwrap_or(false))
-                        .map(|(_, w)| w)
-                        .sum()
-                })
-                .collect();
-            for axis in [Vec3::X, Vec3::Y, Vec3::Z] {
-                let a = placement.rotation * axis;
-                out.push(
-                    body.vertices
-                        .iter()
-                        .zip(&weight)
-                        .map(|(v, &w)| {
-                            if w == 0.0 {
-                                Vec3::ZERO
-                            } else {
-                                w * a.cross(*v - head)
+        let carries: Vec<Vec<bool>> = bones
+            .iter()
+            .map(|&b| {
+                (0..m.bones.len())
+                    .map(|mut j| {
+                        loop {
+                            if j == b {
+                                break true;
                             }
-                        })
-                        .collect(),
-                );
+                            match m.bones[j].parent {
+                                Some(p) => j = p,
+                                None => break false,
+                            }
+                        }
+                    })
+                    .collect()
+            })
+            .collect();
+        let mut out = vec![0.0f32; count * bones.len()];
+        for (v, (joints, weights)) in m
+            .skin_joints
+            .iter()
+            .zip(&m.skin_weights)
+            .take(count)
+            .enumerate()
+        {
+            for (k, carried) in carries.iter().enumerate() {
+                out[v * bones.len() + k] = joints
+                    .iter()
+                    .zip(weights)
+                    .filter(|(j, _)| carried.get(usize::from(**j)).copied().unwrap_or(false))
+                    .map(|(_, w)| w)
+                    .sum();
             }
         }
         out
+    }
+
+    /// The heads of `bones` in this pose, placed by `placement` (sensor space): what a turn
+    /// of each bone (as [`Self::turned`] makes it) turns the skin about.
+    pub fn bone_heads(&self, rest: &RestPose, placement: &Placement, bones: &[usize]) -> Vec<Vec3> {
+        let (globals, pelvis) = self.globals(rest);
+        bones
+            .iter()
+            .map(|&b| {
+                globals.get(b).map_or(placement.pelvis, |g| {
+                    placement.pelvis + placement.rotation * (g.translation - pelvis)
+                })
+            })
+            .collect()
     }
 
     /// `body` (its shape as it is) in this pose.
@@ -337,8 +326,8 @@ impl<'a> Posing<'a> {
 }
 
 /// How the posed vertices of the shape `x` move per unit of each slider of `space`, in each
-/// of several poses: per pose, one column of per-vertex derivatives per slider, by forward
-/// differences (exact for the linear targets; the joints move with the mesh). `body` is the
+/// of several poses: per pose, per vertex, its derivative along each slider (vertex-major:
+/// `[vertex * space.len() + k]`, what a residual at a vertex reads), by forward differences (exact for the linear targets; the joints move with the mesh). `body` is the
 /// shape morphed (any pose: its rest mesh and weights are used), `poses` the posings with
 /// their placement and the vertices they put the shape at. The morph is shared by the poses
 /// (it is the costly part); spread over `threads`.
@@ -348,7 +337,7 @@ pub fn shape_jacobians(
     body: &PosedBody,
     poses: &[(&Posing, &Placement, &[Vec3])],
     threads: usize,
-) -> Result<Vec<Vec<Vec<Vec3>>>, MeasureError> {
+) -> Result<Vec<Vec<Vec3>>, MeasureError> {
     let Some((first, _, _)) = poses.first() else {
         return Ok(Vec::new());
     };
@@ -392,15 +381,20 @@ pub fn shape_jacobians(
             }
         }
     });
-    // Slider-major to pose-major.
-    let mut out: Vec<Vec<Vec<Vec3>>> = vec![Vec::with_capacity(n); poses.len()];
-    for c in columns {
-        for (v, col) in c
+    // Slider-major to vertex-major, per pose.
+    let mut out: Vec<Vec<Vec3>> = poses
+        .iter()
+        .map(|(_, _, at)| vec![Vec3::ZERO; at.len() * n])
+        .collect();
+    for (k, c) in columns.into_iter().enumerate() {
+        for (pose, col) in c
             .unwrap_or(Err(MeasureError::Worker))?
             .into_iter()
             .enumerate()
         {
-            out[v].push(col);
+            for (v, d) in col.into_iter().enumerate() {
+                out[pose][v * n + k] = d;
+            }
         }
     }
     Ok(out)

@@ -8,7 +8,8 @@
 //!
 //! ```text
 //!   Σ_points ρ(n_i · (p_i - v_i))                    the surface: each averaged point against
-//!                                                    the plane of its nearest visible vertex
+//!                                                    the visible skin's triangle it lies over
+//! + Σ_vertices ρ(below the floor)                    the soles: skin under the floor, pushed up
 //! + w_s Σ_vertices ρ(d_out(π(v_j)) z_j / f)          the silhouette: visible skin seen where
 //!                                                    the scene is free space, in metres
 //! + ½ μ (x - m)ᵀ P (x - m)                           the shape prior (mean m, precision P)
@@ -17,9 +18,9 @@
 //!
 //! with ρ the Huber loss. The correspondences are found anew at every step (ICP); each
 //! slider's effect on the posed skin comes from [`shape_jacobians`], each bone's from
-//! [`Posing::pose_jacobian`]. Facing the camera, it sees the front; the calibration's
-//! second view, turned halfway to the side, shows the flank. The back is where the prior
-//! puts it for what was seen.
+//! [`Posing::carried_weights`] and the bones' heads (the normal equations: `fit/normal.rs`).
+//! Facing the camera, it sees the front; the calibration's second view, turned halfway to
+//! the side, shows the flank. The back is where the prior puts it for what was seen.
 
 use std::collections::BTreeMap;
 use std::time::Instant;
@@ -29,6 +30,7 @@ use fitroom_math::cholesky_solve;
 use glam::{Quat, Vec3};
 use serde::Serialize;
 
+mod normal;
 mod residuals;
 
 use crate::MeasureError;
@@ -36,6 +38,7 @@ use crate::posed::{Placement, PosedBody, Posing, ShapeSpace, shape_jacobians};
 use crate::prior::GenderPrior;
 use crate::silhouette::OutsideDistance;
 use crate::view::AveragedView;
+use normal::ViewJacobian;
 use residuals::{Problem, Row, faces_of};
 
 /// How the body is fitted.
@@ -165,7 +168,8 @@ struct ViewState<'a> {
     rows: Vec<Row>,
     /// How far each refined bone has turned from the pose given (rotation vectors).
     turns: Vec<f32>,
-    shape_columns: Vec<Vec<Vec3>>,
+    /// Per vertex, its motion per unit of each slider (vertex-major).
+    shape_columns: Vec<Vec3>,
 }
 
 /// A view's pose after a trial step.
@@ -214,6 +218,8 @@ pub fn fit_body(
     let shape = space.shape(&x);
     let mut points_total = 0;
     let faces = faces_of(model.body_vertex_count as usize, &model.triangles);
+    let carried =
+        Posing::new(model, Vec::new()).carried_weights(&bones, model.body_vertex_count as usize);
     let mut states: Vec<ViewState> = Vec::with_capacity(views.len());
     for vp in views {
         let (points, pixels) = vp.view.points_and_pixels(settings.point_step);
@@ -281,41 +287,26 @@ pub fn fit_body(
         // Normal equations.
         let mut h = vec![0.0f64; unknowns * unknowns];
         let mut g = vec![0.0f64; unknowns];
-        let mut row = vec![0.0f64; unknowns];
-        let mut nonzero: Vec<usize> = Vec::with_capacity(unknowns);
         for (vi, s) in states.iter().enumerate() {
             let at = n + vi * per_view;
-            let (turn_at, shift_at) = (at + nb, at + nb + 3);
-            let pose_columns = s.posing.pose_jacobian(&s.body, &s.place, &bones);
-            let columns: Vec<(usize, &Vec<Vec3>)> = s
-                .shape_columns
-                .iter()
-                .enumerate()
-                .chain(pose_columns.iter().enumerate().map(|(k, c)| (at + k, c)))
-                .collect();
-            row.iter_mut().for_each(|v| *v = 0.0);
-            for rw in &s.rows {
-                let v = rw.at(&s.body.vertices);
-                for &(k, c) in &columns {
-                    row[k] = f64::from(rw.dir.dot(rw.at(c)));
-                }
-                let turn = (v - s.place.pelvis).cross(rw.dir);
-                for a in 0..3 {
-                    row[turn_at + a] = f64::from(turn[a]);
-                    row[shift_at + a] = f64::from(rw.dir[a]);
-                }
-                let (w, r) = (f64::from(rw.w), f64::from(rw.r));
-                // A bone moves only the skin it carries: most rows touch few bones.
-                nonzero.clear();
-                nonzero.extend((0..unknowns).filter(|&i| row[i] != 0.0));
-                for (a, &i) in nonzero.iter().enumerate() {
-                    let wi = w * row[i];
-                    g[i] += wi * r;
-                    for &j in &nonzero[..=a] {
-                        h[i * unknowns + j] += wi * row[j];
-                    }
-                }
-            }
+            let heads = s.posing.bone_heads(&s.body.rest, &s.place, &bones);
+            let jac = ViewJacobian {
+                shape: &s.shape_columns,
+                sliders: n,
+                carried: &carried,
+                heads: &heads,
+                rotation: s.place.rotation,
+                pelvis: s.place.pelvis,
+            };
+            normal::add_view(
+                &mut h,
+                &mut g,
+                unknowns,
+                at,
+                &jac,
+                &s.rows,
+                &s.body.vertices,
+            );
             // The bone turns, pulled weakly to the pose given.
             let pose_mu = f64::from(settings.pose_prior);
             for (k, t) in s.turns.iter().enumerate() {

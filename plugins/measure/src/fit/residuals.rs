@@ -14,7 +14,10 @@ use crate::view::AveragedView;
 const FREE_M: f32 = 0.15;
 
 /// Pixels per side of the tiles the visible skin is binned in for the partner search.
-const TILE: usize = 8;
+const TILE: usize = 4;
+
+/// Rings of tiles searched about a point's at most (TILE × RINGS pixels: 5 cm at 2.5 m).
+const RINGS: usize = 3;
 
 /// One residual's row: value, weight, and where it touches the body (a point of the skin
 /// as a blend of up to three vertices, and the direction it is measured along); a surface
@@ -124,13 +127,16 @@ impl Problem<'_> {
         // partner is looked for among the skin seen in its tile and the ones around it.
         let cam = &self.view.camera;
         let (tw, th) = (WIDTH.div_ceil(TILE), HEIGHT.div_ceil(TILE));
-        let mut tiles: Vec<Vec<u32>> = vec![Vec::new(); tw * th];
         let tile_of = |u: f32, v: f32| -> Option<(usize, usize)> {
             let (tu, tv) = ((u / TILE as f32).floor(), (v / TILE as f32).floor());
             ((0.0..tw as f32).contains(&tu) && (0.0..th as f32).contains(&tv))
                 .then_some((tu as usize, tv as usize))
         };
         let mut seen_at = vec![None; body.vertices.len()];
+        let mut tile_at = vec![usize::MAX; body.vertices.len()];
+        // The tiles' skin, tile after tile (row-major), each tile's vertices in index order:
+        // the three tiles of a row of the neighbourhood are one run of memory.
+        let mut start = vec![0usize; tw * th + 1];
         for (i, v) in body.vertices.iter().enumerate() {
             if !facing[i] {
                 continue;
@@ -140,7 +146,19 @@ impl Problem<'_> {
             };
             seen_at[i] = Some(px);
             if let Some((tu, tv)) = tile_of(px.x, px.y) {
-                tiles[tv * tw + tu].push(i as u32);
+                tile_at[i] = tv * tw + tu;
+                start[tile_at[i] + 1] += 1;
+            }
+        }
+        for t in 0..tw * th {
+            start[t + 1] += start[t];
+        }
+        let mut fill = start.clone();
+        let mut binned = vec![(Vec3::ZERO, 0u32); start[tw * th]];
+        for (i, &t) in tile_at.iter().enumerate() {
+            if t != usize::MAX {
+                binned[fill[t]] = (body.vertices[i], i as u32);
+                fill[t] += 1;
             }
         }
         let huber = |r: f32| {
@@ -153,16 +171,37 @@ impl Problem<'_> {
             let Some((tu, tv)) = tile_of(pu, pv) else {
                 continue;
             };
+            // Ring after ring of tiles about the point's, until the nearest skin found is
+            // nearer than anything outside the rings can be (a vertex seen k tiles away is
+            // at least k tiles' width away across the line of sight), at most RINGS.
             let mut best: Option<(f32, u32)> = None;
-            for y in tv.saturating_sub(1)..(tv + 2).min(th) {
-                for x in tu.saturating_sub(1)..(tu + 2).min(tw) {
-                    for &i in &tiles[y * tw + x] {
-                        let d2 = body.vertices[i as usize].distance_squared(p);
-                        if d2 <= reach2 && best.is_none_or(|(b, bi)| d2 < b || (d2 == b && i < bi))
-                        {
-                            best = Some((d2, i));
-                        }
+            let mut scan = |y: usize, a: usize, b: usize| {
+                for &(v, i) in &binned[start[y * tw + a]..start[y * tw + b + 1]] {
+                    let d2 = v.distance_squared(p);
+                    if d2 <= reach2 && best.is_none_or(|(b, bi)| d2 < b || (d2 == b && i < bi)) {
+                        best = Some((d2, i));
                     }
+                }
+                best
+            };
+            for ring in 0..=RINGS {
+                let (x0, x1) = (tu.saturating_sub(ring), (tu + ring).min(tw - 1));
+                let mut found = None;
+                for y in tv.saturating_sub(ring)..=(tv + ring).min(th - 1) {
+                    if y.abs_diff(tv) == ring {
+                        found = scan(y, x0, x1);
+                        continue;
+                    }
+                    if tu >= ring {
+                        found = scan(y, tu - ring, tu - ring);
+                    }
+                    if tu + ring < tw {
+                        found = scan(y, tu + ring, tu + ring);
+                    }
+                }
+                let covered = (ring * TILE) as f32 * p.z / cam.fx;
+                if found.is_some_and(|(d2, _)| d2 <= covered * covered) {
+                    break;
                 }
             }
             let Some((_, i)) = best else {
