@@ -20,7 +20,7 @@ use std::path::Path;
 use std::sync::atomic::{AtomicUsize, Ordering};
 
 use fitroom_math::stats::percentile;
-use serde::Serialize;
+use serde::{Deserialize, Serialize};
 
 use crate::fit::{FitOptions, FitReport, FitRequest, fit};
 use crate::measure::Measure;
@@ -209,20 +209,63 @@ pub struct SubjectFit {
     pub error: Option<String>,
 }
 
-/// Distribution of |error| of one measure over the subjects.
-#[derive(Clone, Debug, Serialize)]
+/// Distribution of |error| of one measure over the subjects: the one error summary of
+/// fitroom's evaluations (the ANSUR fit's, the measurement from depth's).
+#[derive(Clone, Debug, Serialize, Deserialize)]
 pub struct MeasureStats {
     pub measure: Measure,
     pub count: usize,
     /// Share of subjects with |error| <= the tolerance.
+    #[serde(default)]
     pub within_tolerance: f64,
     pub mean_abs_cm: f64,
+    #[serde(default)]
     pub median_abs_cm: f64,
+    #[serde(default)]
     pub p90_abs_cm: f64,
     pub p95_abs_cm: f64,
     pub max_abs_cm: f64,
     /// Mean signed error (achieved - measured), cm.
     pub bias_cm: f64,
+}
+
+impl MeasureStats {
+    /// The summary of `errors` (cm, signed); a non-finite error is a failure: counted, never
+    /// within the tolerance, at infinity in the percentiles, left out of the means.
+    pub fn of(measure: Measure, errors: &[f64], tolerance_cm: f64) -> Self {
+        let mut abs: Vec<f64> = errors
+            .iter()
+            .map(|e| {
+                if e.is_finite() {
+                    e.abs()
+                } else {
+                    f64::INFINITY
+                }
+            })
+            .collect();
+        abs.sort_by(|a, b| a.total_cmp(b));
+        let finite: Vec<f64> = errors.iter().copied().filter(|e| e.is_finite()).collect();
+        let per = |v: f64| v / finite.len().max(1) as f64;
+        let at = |q: f64| {
+            if abs.is_empty() {
+                f64::NAN
+            } else {
+                percentile(&abs, q)
+            }
+        };
+        Self {
+            measure,
+            count: abs.len(),
+            within_tolerance: abs.iter().filter(|&&e| e <= tolerance_cm).count() as f64
+                / abs.len().max(1) as f64,
+            mean_abs_cm: per(finite.iter().map(|e| e.abs()).sum()),
+            median_abs_cm: at(0.5),
+            p90_abs_cm: at(0.9),
+            p95_abs_cm: at(0.95),
+            max_abs_cm: abs.last().copied().unwrap_or(f64::NAN),
+            bias_cm: per(finite.iter().sum()),
+        }
+    }
 }
 
 /// The evaluation of [`fit`] over survey subjects.
@@ -320,18 +363,7 @@ pub fn summarise(fits: Vec<SubjectFit>, tolerance_cm: f32) -> AnsurReport {
         pairs += abs.len();
         within += ok;
         all_abs.extend(&abs);
-        let finite: Vec<f64> = errs.iter().copied().filter(|e| e.is_finite()).collect();
-        per_measure.push(MeasureStats {
-            measure,
-            count: abs.len(),
-            within_tolerance: ok as f64 / abs.len().max(1) as f64,
-            mean_abs_cm: finite.iter().map(|e| e.abs()).sum::<f64>() / finite.len().max(1) as f64,
-            median_abs_cm: percentile(&abs, 0.5),
-            p90_abs_cm: percentile(&abs, 0.9),
-            p95_abs_cm: percentile(&abs, 0.95),
-            max_abs_cm: abs.last().copied().unwrap_or(f64::NAN),
-            bias_cm: finite.iter().sum::<f64>() / finite.len().max(1) as f64,
-        });
+        per_measure.push(MeasureStats::of(measure, &errs, tol));
     }
     per_measure.sort_by(|a, b| a.within_tolerance.total_cmp(&b.within_tolerance));
     let mut histogram: Vec<(f32, usize)> = (0..20).map(|i| (i as f32 * 0.1, 0)).collect();

@@ -12,6 +12,6 @@ pub mod stats;
 
 pub use geometry::round_cone_distance;
 pub use grid::CellGrid;
-pub use linear::cholesky_solve;
+pub use linear::{Cholesky, cholesky_solve};
 pub use parallel::parallel_map;
 pub use rigid::RigidTransform;

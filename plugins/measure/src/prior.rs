@@ -9,7 +9,7 @@ use std::path::Path;
 
 use fitroom_body::ansur::AnsurSubject;
 use fitroom_body::{BodyModel, FitOptions, FitRequest, fit};
-use fitroom_math::cholesky_solve;
+use fitroom_math::Cholesky;
 use serde::{Deserialize, Serialize};
 
 use crate::posed::ShapeSpace;
@@ -99,20 +99,32 @@ impl GenderPrior {
     /// slider (gender within one gender) move a little.
     pub fn precision(&self) -> Option<Vec<f64>> {
         let n = self.mean.len();
-        let mut c: Vec<f64> = self.covariance.iter().map(|&v| f64::from(v)).collect();
-        for i in 0..n {
-            c[i * n + i] += 4e-4;
-        }
+        let c = self.covariance_factor()?;
         let mut out = vec![0.0; n * n];
         for j in 0..n {
             let mut e = vec![0.0; n];
             e[j] = 1.0;
-            let col = cholesky_solve(&c, &e, n)?;
+            let col = c.solve(&e);
             for i in 0..n {
                 out[i * n + j] = col[i];
             }
         }
         Some(out)
+    }
+
+    /// `ln det` of [`Self::precision`]: a narrow prior's density is high where it is.
+    pub fn log_det_precision(&self) -> Option<f64> {
+        Some(-self.covariance_factor()?.log_det())
+    }
+
+    /// The well-conditioned covariance, factored.
+    fn covariance_factor(&self) -> Option<Cholesky> {
+        let n = self.mean.len();
+        let mut c: Vec<f64> = self.covariance.iter().map(|&v| f64::from(v)).collect();
+        for i in 0..n {
+            c[i * n + i] += 4e-4;
+        }
+        Cholesky::new(&c, n)
     }
 }
 

@@ -12,8 +12,10 @@ use fitroom_depth::{DepthCamera, DepthFrame, PIXELS};
 use fitroom_measure::eval::{
     EvalOptions, MeasureReport, PoseSource, Stance, evaluate, held_out, record, training,
 };
+use fitroom_measure::person::STUCK_RMS_M;
 use fitroom_measure::{
-    AveragedView, CalibrationFrame, FitSettings, MeasureError, ShapePrior, ViewPose, fit_body, seed,
+    AveragedView, CalibrationFrame, FitSettings, MeasureError, ShapePrior, ShapeSpace, ViewPose,
+    fit_body, measure_person, seed,
 };
 use glam::Vec3;
 
@@ -266,4 +268,63 @@ fn frames_without_depth_are_refused() {
     .expect_err("no body from no depth");
     assert!(matches!(e, MeasureError::TooFewPoints { .. }), "{e}");
     assert!(seed::measure(&frames).is_err());
+}
+
+/// A start the fit cannot recover from (both arms folded onto the chest, as the tracker
+/// reports them for some small women) is detected by the points left far from the skin and
+/// fitted again from the pose the calibration asks for: the person is measured anyway.
+#[test]
+fn a_fit_stuck_on_a_wrong_start_is_made_again() {
+    let model = model();
+    let shape = fitroom_body::Shape {
+        gender: 0.0,
+        weight: 0.4,
+        ..fitroom_body::Shape::default()
+    };
+    let rec = record(
+        &model,
+        &shape,
+        &Stance::drawn(11),
+        12,
+        NoiseSettings::default(),
+        11,
+        None,
+    )
+    .expect("a recording");
+    let truth = model.measure(&rec.body.positions).expect("measured");
+    let view = AveragedView::new(&rec.frames).expect("averaged");
+    // Each upper arm turned 70° from the filmed pose, towards the body's middle.
+    let mut folded = rec.locals.clone();
+    for (bone, sign) in [("upperarm_l", 1.0f32), ("upperarm_r", -1.0)] {
+        let b = model.bone_index(bone).expect("an upper arm");
+        folded[b] *= glam::Quat::from_rotation_z(sign * 70f32.to_radians());
+    }
+    let views = [ViewPose {
+        view: &view,
+        locals: &folded,
+        placement: rec.placement,
+    }];
+    let prior = ShapePrior::shipped().expect("the shipped prior");
+    let settings = FitSettings::default();
+    let worst =
+        |e: &fitroom_measure::BodyEstimate| e.view_rms_m.iter().copied().fold(0.0f32, f32::max);
+    // The premise: from this start, the fit alone stays stuck.
+    let start = ShapeSpace::full().shape(&prior.female.mean);
+    let alone = fit_body(&model, &views, &start, Some(&prior.female), &settings).expect("a fit");
+    assert!(
+        worst(&alone) > STUCK_RMS_M,
+        "the folded start did not trap the fit ({:.1} mm): the test shows nothing",
+        worst(&alone) * 1e3
+    );
+    let person = measure_person(&model, &views, &prior, &settings).expect("measured");
+    let e = &person.estimate;
+    let err = |m: Measure| m.of(&e.measurements) - m.of(&truth);
+    assert!(
+        worst(e) < STUCK_RMS_M,
+        "still stuck: {:.1} mm",
+        worst(e) * 1e3
+    );
+    for m in [Measure::Stature, Measure::Bust, Measure::Hip] {
+        assert!(err(m).abs() < 2.0, "{m:?}: {:+.1} cm", err(m));
+    }
 }

@@ -4,8 +4,8 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use fitroom_body::ansur::AnsurSubject;
+pub use fitroom_body::ansur::MeasureStats;
 use fitroom_body::{BodyModel, FitOptions, FitRequest, Measure, Measurements, SizeChart, fit};
-use fitroom_math::stats::percentile;
 use serde::{Deserialize, Serialize};
 
 use super::dressed::{DressOptions, worn};
@@ -13,7 +13,7 @@ use super::record::{Stance, TURN_DEG, record};
 use crate::fit::FitSettings;
 use crate::fit::ViewPose;
 use crate::garment_size::garment_chart;
-use crate::person::measure_person;
+use crate::person::{PersonMeasurement, measure_person};
 use crate::posed::Placement;
 use crate::prior::ShapePrior;
 use crate::seed;
@@ -91,40 +91,30 @@ pub struct SubjectResult {
     pub view_rms_mm: Vec<f32>,
     #[serde(default)]
     pub turned_dropped: bool,
+    /// Both genders' fits, the kept one first (what the choice between them saw).
+    #[serde(default)]
+    pub fits: Vec<GenderFit>,
     pub error: Option<String>,
 }
 
-/// The error distribution of one measurement, cm.
+/// One gender's fit of a subject.
 #[derive(Clone, Debug, Serialize, Deserialize)]
-pub struct MeasureStats {
-    pub measure: Measure,
-    pub count: usize,
-    pub mean_abs_cm: f64,
-    /// Mean of measured minus true.
-    pub bias_cm: f64,
-    pub p95_abs_cm: f64,
-    pub max_abs_cm: f64,
+pub struct GenderFit {
+    pub female: bool,
+    /// The fit's cost, m²; `ln det` of its normal matrix; its evidence
+    /// ([`crate::person::evidence`]), nats.
+    pub cost: f64,
+    pub log_det_h: f64,
+    pub evidence: f64,
+    pub view_rms_mm: Vec<f32>,
+    /// Its measurements, cm, and the size they give (the subject's gender's chart).
+    pub measured: BTreeMap<Measure, f32>,
+    pub size: Option<String>,
 }
 
-impl MeasureStats {
-    fn of(measure: Measure, errors: &[f64]) -> Self {
-        let mut abs: Vec<f64> = errors.iter().map(|e| e.abs()).collect();
-        abs.sort_by(f64::total_cmp);
-        let n = errors.len().max(1) as f64;
-        Self {
-            measure,
-            count: errors.len(),
-            mean_abs_cm: abs.iter().sum::<f64>() / n,
-            bias_cm: errors.iter().sum::<f64>() / n,
-            p95_abs_cm: if abs.is_empty() {
-                0.0
-            } else {
-                percentile(&abs, 0.95)
-            },
-            max_abs_cm: abs.last().copied().unwrap_or(0.0),
-        }
-    }
-}
+/// The error summary's tolerance (`within_tolerance`: the share within it), cm: a quarter of
+/// an EN 13402 size step (4 cm of bust).
+pub const TOLERANCE_CM: f64 = 1.0;
 
 /// The evaluation's figures.
 #[derive(Clone, Debug, Serialize, Deserialize)]
@@ -253,6 +243,7 @@ fn one(
         garment_size: None,
         view_rms_mm: Vec::new(),
         turned_dropped: false,
+        fits: Vec::new(),
         error: None,
     };
     let request = FitRequest {
@@ -263,7 +254,7 @@ fn one(
     let mut garment_size: Option<String> = None;
     let mut views_seen: (Vec<f32>, bool) = (Vec::new(), false);
     let mut run =
-        || -> Result<(Measurements, Measurements, seed::SeedMeasurement, bool, f64), String> {
+        || -> Result<(Measurements, PersonMeasurement, seed::SeedMeasurement, f64), String> {
             let shape = fit(model, &request, &FitOptions::default())
                 .map_err(|e| e.to_string())?
                 .shape;
@@ -355,11 +346,28 @@ fn one(
                 ours.estimate.view_rms_m.iter().map(|r| r * 1e3).collect(),
                 ours.turned_dropped,
             );
-            Ok((truth, ours.estimate.measurements, theirs, ours.female, ms))
+            Ok((truth, ours, theirs, ms))
         };
     match run() {
-        Ok((truth, ours, theirs, found_female, ms)) => {
+        Ok((truth, person, theirs, ms)) => {
             let chart = if s.female { women } else { men };
+            let found_female = person.female;
+            let fit_of = |e: &crate::BodyEstimate, female: bool| GenderFit {
+                female,
+                cost: e.cost,
+                log_det_h: e.log_det_h,
+                evidence: person.evidence[usize::from(!female)],
+                view_rms_mm: e.view_rms_m.iter().map(|r| r * 1e3).collect(),
+                measured: Measure::ALL
+                    .iter()
+                    .map(|&m| (m, m.of(&e.measurements)))
+                    .collect(),
+                size: chart.recommend(&e.measurements).size,
+            };
+            result.fits = std::iter::once(fit_of(&person.estimate, found_female))
+                .chain(person.other.iter().map(|o| fit_of(o, !found_female)))
+                .collect();
+            let ours = person.estimate.measurements;
             result.truth = Measure::ALL.iter().map(|&m| (m, m.of(&truth))).collect();
             result.ours = Measure::ALL.iter().map(|&m| (m, m.of(&ours))).collect();
             result.seed_stature_cm = theirs.height_m * 100.0;
@@ -406,7 +414,7 @@ fn summarise(results: Vec<SubjectResult>, options: &EvalOptions) -> MeasureRepor
     };
     let ours = EVALUATED
         .iter()
-        .map(|&m| MeasureStats::of(m, &errors(m)))
+        .map(|&m| MeasureStats::of(m, &errors(m), TOLERANCE_CM))
         .collect();
     let seed_errors = |f: fn(&SubjectResult) -> f32, m: Measure| -> Vec<f64> {
         ok.iter().map(|r| f64::from(f(r) - r.truth[&m])).collect()
@@ -415,20 +423,24 @@ fn summarise(results: Vec<SubjectResult>, options: &EvalOptions) -> MeasureRepor
         MeasureStats::of(
             Measure::Stature,
             &seed_errors(|r| r.seed_stature_cm, Measure::Stature),
+            TOLERANCE_CM,
         ),
         MeasureStats::of(
             Measure::ShoulderWidth,
             &seed_errors(|r| r.seed_shoulder_width_cm, Measure::ShoulderWidth),
+            TOLERANCE_CM,
         ),
     ];
     let seed_map_only = vec![
         MeasureStats::of(
             Measure::Stature,
             &seed_errors(|r| r.seed_stature_map_cm, Measure::Stature),
+            TOLERANCE_CM,
         ),
         MeasureStats::of(
             Measure::ShoulderWidth,
             &seed_errors(|r| r.seed_shoulder_width_map_cm, Measure::ShoulderWidth),
+            TOLERANCE_CM,
         ),
     ];
     let n = ok.len().max(1) as f64;

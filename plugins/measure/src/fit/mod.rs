@@ -26,7 +26,7 @@ use std::collections::BTreeMap;
 use std::time::Instant;
 
 use fitroom_body::{BodyModel, Measure, Measurements, Shape};
-use fitroom_math::cholesky_solve;
+use fitroom_math::{Cholesky, cholesky_solve};
 use glam::{Quat, Vec3};
 use serde::Serialize;
 
@@ -103,8 +103,12 @@ pub struct BodyEstimate {
     /// The same per view, each distance clamped at [`VIEW_RMS_CLAMP_M`] (a view the fit
     /// could not match shows as one much worse than the others).
     pub view_rms_m: Vec<f32>,
-    /// The fit's final cost (data and prior): what compares two fits of the same frames.
+    /// The fit's final cost (data and prior), m².
     pub cost: f64,
+    /// `ln det` of the final normal matrix (the posterior's precision up to the prior's
+    /// weight): how sharply the frames pin the unknowns down, for comparing fits made with
+    /// different priors (see [`crate::person`]).
+    pub log_det_h: f64,
     /// Per measure, one standard deviation, cm: the sliders' posterior covariance (the
     /// prior's weight is the points' error variance, so `weight × H⁻¹`) carried through
     /// each measure's slope along each slider.
@@ -115,6 +119,11 @@ pub struct BodyEstimate {
 }
 
 impl BodyEstimate {
+    /// The points' RMS in the view the fit matched worst, metres.
+    pub fn worst_view_rms_m(&self) -> f32 {
+        self.view_rms_m.iter().copied().fold(0.0, f32::max)
+    }
+
     /// The measurements by name, cm.
     pub fn by_name(&self) -> BTreeMap<Measure, f32> {
         Measure::ALL
@@ -400,19 +409,12 @@ pub fn fit_body(
     let first = &states[0];
     let shape = space.shape(&x);
     let (measurements, probe) = model.measure_with_probe(&first.body.positions)?;
-    let uncertainty_cm = match &last_h {
-        Some(h) => uncertainty(
-            &first.posing,
-            &space,
-            &x,
-            &first.body,
-            &probe,
-            h,
-            unknowns,
-            mu,
-        )?,
+    let factor = last_h.as_deref().and_then(|h| Cholesky::new(h, unknowns));
+    let uncertainty_cm = match &factor {
+        Some(h) => uncertainty(&first.posing, &space, &x, &first.body, &probe, h, mu)?,
         None => Vec::new(),
     };
+    let log_det_h = factor.as_ref().map_or(f64::NAN, Cholesky::log_det);
     let surface: Vec<f32> = states
         .iter()
         .flat_map(|s| s.rows.iter().filter(|r| r.surface).map(|r| r.r))
@@ -437,6 +439,7 @@ pub fn fit_body(
         rms_m,
         view_rms_m,
         cost,
+        log_det_h,
         uncertainty_cm,
         points: points_total,
         iterations,
@@ -445,16 +448,14 @@ pub fn fit_body(
 }
 
 /// One standard deviation per measure (see [`BodyEstimate::uncertainty_cm`]); `h` is the
-/// last step's normal matrix over `unknowns` (the sliders first).
-#[allow(clippy::too_many_arguments)]
+/// last step's normal matrix, factored (the sliders first).
 fn uncertainty(
     posing: &Posing,
     space: &ShapeSpace,
     x: &[f32],
     body: &PosedBody,
     probe: &fitroom_body::measure::MeasureProbe,
-    h: &[f64],
-    unknowns: usize,
+    h: &Cholesky,
     variance: f64,
 ) -> Result<Vec<(Measure, f32)>, MeasureError> {
     let n = space.len();
@@ -473,9 +474,9 @@ fn uncertainty(
     // The sliders' block of the inverse.
     let mut cov = vec![0.0f64; n * n];
     for j in 0..n {
-        let mut e = vec![0.0; unknowns];
+        let mut e = vec![0.0; n];
         e[j] = 1.0;
-        let col = cholesky_solve(h, &e, unknowns).ok_or(MeasureError::Singular)?;
+        let col = h.solve(&e);
         for i in 0..n {
             cov[i * n + j] = col[i] * variance;
         }
