@@ -8,6 +8,7 @@ use bevy::prelude::*;
 use fitroom_body::Shape;
 use fitroom_body::plugin::AvatarShape;
 use fitroom_depth::plugin::DepthFeed;
+use fitroom_garment::asset::GarmentAsset;
 use fitroom_garment::plugin::{GarmentRequest, GarmentStatus};
 use fitroom_garment::source::GarmentSource;
 use fitroom_measure::garment_size::garment_chart;
@@ -87,28 +88,34 @@ fn forget(
     }
 }
 
-/// Once measured (or when the garment changes), the garment's recommended size is worn.
+/// Once measured (or when the garment changes, or its file is edited), the garment's
+/// recommended size is worn.
 fn size_garment(
     measured: Option<Res<BodyMeasurements>>,
     status: Res<GarmentStatus>,
+    garments: Res<Assets<GarmentAsset>>,
     mut request: ResMut<GarmentRequest>,
     mut advice: ResMut<SizeAdvice>,
 ) {
     let Some(measured) = measured else {
         return;
     };
-    let Some(file) = status.file.clone() else {
+    let (Some(file), Some(asset)) = (&status.file, &status.asset) else {
         return;
     };
     let garment = file.display().to_string();
-    if !measured.is_changed() && advice.garment.as_deref() == Some(garment.as_str()) {
+    if !measured.is_changed()
+        && !garments.is_changed()
+        && advice.garment.as_deref() == Some(garment.as_str())
+    {
         return;
     }
-    advice.garment = Some(garment);
-    let (size, reason) = match recommend(&file, &measured) {
-        Ok(r) => r,
-        Err(why) => (None, why),
+    // Not loaded yet: sized when it is.
+    let Some(source) = garments.get(asset) else {
+        return;
     };
+    advice.garment = Some(garment);
+    let (size, reason) = recommend(&source.0, &measured);
     advice.size = size.clone();
     advice.reason = reason;
     if size.is_some() && request.size != size {
@@ -116,15 +123,11 @@ fn size_garment(
     }
 }
 
-/// The size of the garment in `file` for `measured`, and why.
-fn recommend(
-    file: &std::path::Path,
-    measured: &BodyMeasurements,
-) -> Result<(Option<String>, String), String> {
-    let source = GarmentSource::load(file).map_err(|e| e.to_string())?;
-    let chart = match garment_chart(&source) {
+/// The size of `garment` for `measured`, and why.
+fn recommend(garment: &GarmentSource, measured: &BodyMeasurements) -> (Option<String>, String) {
+    let chart = match garment_chart(garment) {
         Ok(chart) => chart,
-        Err(why) => return Ok((None, why)),
+        Err(why) => return (None, why),
     };
     let r = chart.recommend(&measured.measurements);
     let reasons: Vec<String> = r
@@ -133,5 +136,5 @@ fn recommend(
         .filter(|a| r.decided_by.contains(&a.measure))
         .map(|a| a.reason.clone())
         .collect();
-    Ok((r.size, reasons.join("; ")))
+    (r.size, reasons.join("; "))
 }

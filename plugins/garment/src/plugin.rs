@@ -86,8 +86,9 @@ pub struct GarmentRequest {
 pub struct GarmentStatus {
     /// `name size` of the garment worn.
     pub worn: Option<String>,
-    /// The garment file worn (or being loaded).
+    /// The garment file worn (or being loaded), and its asset (its size chart, say).
     pub file: Option<PathBuf>,
+    pub asset: Option<Handle<GarmentAsset>>,
     pub particles: usize,
     /// The last load error (the garment worn stays).
     pub error: Option<String>,
@@ -209,6 +210,7 @@ fn request_garment(
         }
         *wearing = Wearing::default();
         status.worn = None;
+        status.asset = None;
         status.error = None;
         if let Some(hidden) = hidden.as_mut() {
             hidden.0 = None;
@@ -217,7 +219,9 @@ fn request_garment(
     };
     match garment_asset_path(&root.0, path) {
         Ok(asset) => {
-            wearing.handle = Some(server.load(asset));
+            let handle = server.load(asset);
+            status.asset = Some(handle.clone());
+            wearing.handle = Some(handle);
             wearing.dress = true;
         }
         Err(e) => {
