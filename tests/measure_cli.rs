@@ -36,7 +36,9 @@ fn value(list: &serde_json::Value, name: &str) -> f64 {
 fn a_recorded_calibration_is_measured_from_its_dump() {
     let dir = scratch("calibration");
     let d = dir.to_str().expect("a UTF-8 path");
-    let out = fitroom(&["measure", "record", d, "--index", "5", "--frames", "50"]);
+    // Subject 3 (a woman, 160 cm). (Subject 5, a 182 cm woman, is one of the 4.5 % whose
+    // gender the fit gets wrong through the tracker: docs/measure.md.)
+    let out = fitroom(&["measure", "record", d, "--index", "3", "--frames", "50"]);
     assert!(
         out.status.success(),
         "{}",
