@@ -293,11 +293,11 @@ fn a_fit_stuck_on_a_wrong_start_is_made_again() {
     .expect("a recording");
     let truth = model.measure(&rec.body.positions).expect("measured");
     let view = AveragedView::new(&rec.frames).expect("averaged");
-    // Each upper arm turned 70° from the filmed pose, towards the body's middle.
+    // Each upper arm turned 110° from the filmed pose, towards the body's middle.
     let mut folded = rec.locals.clone();
     for (bone, sign) in [("upperarm_l", 1.0f32), ("upperarm_r", -1.0)] {
         let b = model.bone_index(bone).expect("an upper arm");
-        folded[b] *= glam::Quat::from_rotation_z(sign * 70f32.to_radians());
+        folded[b] *= glam::Quat::from_rotation_z(sign * 110f32.to_radians());
     }
     let views = [ViewPose {
         view: &view,
