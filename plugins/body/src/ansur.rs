@@ -233,17 +233,7 @@ impl MeasureStats {
     /// The summary of `errors` (cm, signed); a non-finite error is a failure: counted, never
     /// within the tolerance, at infinity in the percentiles, left out of the means.
     pub fn of(measure: Measure, errors: &[f64], tolerance_cm: f64) -> Self {
-        let mut abs: Vec<f64> = errors
-            .iter()
-            .map(|e| {
-                if e.is_finite() {
-                    e.abs()
-                } else {
-                    f64::INFINITY
-                }
-            })
-            .collect();
-        abs.sort_by(|a, b| a.total_cmp(b));
+        let abs = sorted_abs(errors);
         let finite: Vec<f64> = errors.iter().copied().filter(|e| e.is_finite()).collect();
         let per = |v: f64| v / finite.len().max(1) as f64;
         let at = |q: f64| {
@@ -266,6 +256,22 @@ impl MeasureStats {
             bias_cm: per(finite.iter().sum()),
         }
     }
+}
+
+/// `|errors|`, smallest first; a non-finite error (a failed fit) at infinity.
+fn sorted_abs(errors: &[f64]) -> Vec<f64> {
+    let mut abs: Vec<f64> = errors
+        .iter()
+        .map(|e| {
+            if e.is_finite() {
+                e.abs()
+            } else {
+                f64::INFINITY
+            }
+        })
+        .collect();
+    abs.sort_by(f64::total_cmp);
+    abs
 }
 
 /// The evaluation of [`fit`] over survey subjects.
@@ -348,17 +354,7 @@ pub fn summarise(fits: Vec<SubjectFit>, tolerance_cm: f32) -> AnsurReport {
             .filter_map(|f| f.residuals_cm.get(&measure))
             .map(|&e| e as f64)
             .collect();
-        let mut abs: Vec<f64> = errs
-            .iter()
-            .map(|e| {
-                if e.is_finite() {
-                    e.abs()
-                } else {
-                    f64::INFINITY
-                }
-            })
-            .collect();
-        abs.sort_by(|a, b| a.total_cmp(b));
+        let abs = sorted_abs(&errs);
         let ok = abs.iter().filter(|&&e| e <= tol).count();
         pairs += abs.len();
         within += ok;
