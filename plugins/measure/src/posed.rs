@@ -145,49 +145,6 @@ impl<'a> Posing<'a> {
         locals
     }
 
-    /// Per body vertex (of `count`), per bone of `bones`, the vertex's skin weight that a
-    /// turn of the bone carries: its weight on the bone and on every bone below it.
-    /// Vertex-major (`[vertex * bones.len() + k]`); it depends on the rig only.
-    pub fn carried_weights(&self, bones: &[usize], count: usize) -> Vec<f32> {
-        let m = self.model;
-        let carries: Vec<Vec<bool>> = bones
-            .iter()
-            .map(|&b| {
-                (0..m.bones.len())
-                    .map(|mut j| {
-                        loop {
-                            if j == b {
-                                break true;
-                            }
-                            match m.bones[j].parent {
-                                Some(p) => j = p,
-                                None => break false,
-                            }
-                        }
-                    })
-                    .collect()
-            })
-            .collect();
-        let mut out = vec![0.0f32; count * bones.len()];
-        for (v, (joints, weights)) in m
-            .skin_joints
-            .iter()
-            .zip(&m.skin_weights)
-            .take(count)
-            .enumerate()
-        {
-            for (k, carried) in carries.iter().enumerate() {
-                out[v * bones.len() + k] = joints
-                    .iter()
-                    .zip(weights)
-                    .filter(|(j, _)| carried.get(usize::from(**j)).copied().unwrap_or(false))
-                    .map(|(_, w)| w)
-                    .sum();
-            }
-        }
-        out
-    }
-
     /// The heads of `bones` in this pose, placed by `placement` (sensor space): what a turn
     /// of each bone (as [`Self::turned`] makes it) turns the skin about.
     pub fn bone_heads(&self, rest: &RestPose, placement: &Placement, bones: &[usize]) -> Vec<Vec3> {
@@ -323,6 +280,48 @@ impl<'a> Posing<'a> {
         self.model.add_targets(&mut out, &change);
         Ok((out, h))
     }
+}
+
+/// Per body vertex (of `count`), per bone of `bones`, the vertex's skin weight that a
+/// turn of the bone carries: its weight on the bone and on every bone below it.
+/// Vertex-major (`[vertex * bones.len() + k]`); it depends on the rig only, not on a pose.
+pub fn carried_weights(m: &BodyModel, bones: &[usize], count: usize) -> Vec<f32> {
+    let carries: Vec<Vec<bool>> = bones
+        .iter()
+        .map(|&b| {
+            (0..m.bones.len())
+                .map(|mut j| {
+                    loop {
+                        if j == b {
+                            break true;
+                        }
+                        match m.bones[j].parent {
+                            Some(p) => j = p,
+                            None => break false,
+                        }
+                    }
+                })
+                .collect()
+        })
+        .collect();
+    let mut out = vec![0.0f32; count * bones.len()];
+    for (v, (joints, weights)) in m
+        .skin_joints
+        .iter()
+        .zip(&m.skin_weights)
+        .take(count)
+        .enumerate()
+    {
+        for (k, carried) in carries.iter().enumerate() {
+            out[v * bones.len() + k] = joints
+                .iter()
+                .zip(weights)
+                .filter(|(j, _)| carried.get(usize::from(**j)).copied().unwrap_or(false))
+                .map(|(_, w)| w)
+                .sum();
+        }
+    }
+    out
 }
 
 /// How the posed vertices of the shape `x` move per unit of each slider of `space`, in each

@@ -18,7 +18,7 @@
 //!
 //! with ρ the Huber loss. The correspondences are found anew at every step (ICP); each
 //! slider's effect on the posed skin comes from [`shape_jacobians`], each bone's from
-//! [`Posing::carried_weights`] and the bones' heads (the normal equations: `fit/normal.rs`).
+//! [`carried_weights`] and the bones' heads (the normal equations: `fit/normal.rs`).
 //! Facing the camera, it sees the front; the calibration's second view, turned halfway to
 //! the side, shows the flank. The back is where the prior puts it for what was seen.
 
@@ -34,7 +34,7 @@ mod normal;
 mod residuals;
 
 use crate::MeasureError;
-use crate::posed::{Placement, PosedBody, Posing, ShapeSpace, shape_jacobians};
+use crate::posed::{Placement, PosedBody, Posing, ShapeSpace, carried_weights, shape_jacobians};
 use crate::prior::GenderPrior;
 use crate::silhouette::OutsideDistance;
 use crate::view::AveragedView;
@@ -227,8 +227,7 @@ pub fn fit_body(
     let shape = space.shape(&x);
     let mut points_total = 0;
     let faces = faces_of(model.body_vertex_count as usize, &model.triangles);
-    let carried =
-        Posing::new(model, Vec::new()).carried_weights(&bones, model.body_vertex_count as usize);
+    let carried = carried_weights(model, &bones, model.body_vertex_count as usize);
     let mut states: Vec<ViewState> = Vec::with_capacity(views.len());
     for vp in views {
         let (points, pixels) = vp.view.points_and_pixels(settings.point_step);

@@ -148,7 +148,7 @@ mod tests {
     use super::{ViewJacobian, add_view};
     use crate::fit::REFINED;
     use crate::fit::residuals::Row;
-    use crate::posed::{Placement, Posing, ShapeSpace, shape_jacobians};
+    use crate::posed::{Placement, Posing, ShapeSpace, carried_weights, shape_jacobians};
 
     /// Each row derivative the normal equations are made of, against the row's skin point
     /// moved by the unknown (a bone turned, the body turned or shifted, a slider stepped) and
@@ -178,7 +178,7 @@ mod tests {
         let n = space.len();
         let poses = [(&posing, &place, body.vertices.as_slice())];
         let shape_columns = shape_jacobians(&space, &x, &body, &poses, 2).expect("slider motions");
-        let carried = posing.carried_weights(&bones, body.vertices.len());
+        let carried = carried_weights(&model, &bones, body.vertices.len());
         let heads = posing.bone_heads(&body.rest, &place, &bones);
         let jac = ViewJacobian {
             shape: &shape_columns[0],
