@@ -148,7 +148,9 @@ fn the_shipped_default_tracks_the_performer_into_try_on() {
     let mut hints = std::collections::BTreeSet::new();
     for _ in 0..200 {
         app.update();
-        if let fitroom_measure::plugin::CalibrationStatus::Collecting { hint: Some(h), .. } = &app
+        if let fitroom_measure::plugin::CalibrationStatus::Collecting(
+            fitroom_measure::calibration::Collecting { hint: Some(h), .. },
+        ) = &app
             .world()
             .resource::<fitroom_measure::plugin::Calibration>()
             .status

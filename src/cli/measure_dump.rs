@@ -11,7 +11,7 @@ use fitroom_body::{FitOptions, FitRequest, Measure, SizeChart, fit};
 use fitroom_depth::DepthCamera;
 use fitroom_depth::fakenect::{Recording, RecordingWriter};
 use fitroom_depth::synthetic::NoiseSettings;
-use fitroom_measure::calibration::{Collector, Progress};
+use fitroom_measure::calibration::{Collecting, Collector, Progress};
 use fitroom_measure::eval::{Stance, TURN_DEG, held_out, record};
 use fitroom_measure::tracked::tracked_views;
 use fitroom_measure::{FitSettings, ShapePrior, ViewPose, measure_person};
@@ -168,13 +168,13 @@ pub fn measure_dump(args: DumpArgs) -> Result<()> {
         }
         last = Some(progress);
     }
-    if let Some(Progress::Collecting {
+    if let Some(Progress::Collecting(Collecting {
         view,
         views,
         frames,
         need,
         hint,
-    }) = last
+    })) = last
     {
         bail!(
             "the recording ended before the calibration was complete ({read} frames read; view {} of {views}: {frames} of {need} frames{}): record a person standing still a second facing the sensor, then a second turned halfway to the side",

@@ -4,6 +4,7 @@
 
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPrimaryContextPass, egui};
+use fitroom_measure::calibration::Collecting;
 use fitroom_measure::plugin::{Calibration, CalibrationStatus};
 
 use super::KioskState;
@@ -52,9 +53,9 @@ fn pose_guide(
     let Some(calibration) = calibration else {
         return Ok(());
     };
-    let CalibrationStatus::Collecting {
+    let CalibrationStatus::Collecting(Collecting {
         view, views, hint, ..
-    } = &calibration.status
+    }) = &calibration.status
     else {
         return Ok(());
     };

@@ -5,6 +5,7 @@ use bevy::diagnostic::{DiagnosticsStore, FrameTimeDiagnosticsPlugin};
 use bevy::prelude::*;
 use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use fitroom_garment::plugin::GarmentStatus;
+use fitroom_measure::calibration::Collecting;
 use fitroom_measure::plugin::{BodyMeasurements, Calibration, CalibrationStatus};
 use fitroom_motion::plugin::AvatarMotion;
 use fitroom_sensor::plugin::SensorFeed;
@@ -85,7 +86,7 @@ fn status_overlay(
                 if *state.get() == KioskState::Calibrate {
                     match calibration.as_ref().map(|c| &c.status) {
                         // The pose guide (`guide.rs`) shows the progress and the hint.
-                        Some(CalibrationStatus::Collecting { .. }) => {}
+                        Some(CalibrationStatus::Collecting(_)) => {}
                         Some(CalibrationStatus::Fitting) => {
                             ui.label("measuring: fitting your body…");
                         }
@@ -98,7 +99,7 @@ fn status_overlay(
                 // measurement goes on, and says what it waits for.
                 if *state.get() == KioskState::TryOn
                     && measured.is_none()
-                    && let Some(CalibrationStatus::Collecting { hint, .. }) =
+                    && let Some(CalibrationStatus::Collecting(Collecting { hint, .. })) =
                         calibration.as_ref().map(|c| &c.status)
                 {
                     ui.colored_label(

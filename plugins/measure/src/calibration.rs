@@ -53,18 +53,22 @@ impl Default for CollectSettings {
 /// One view collected: its frames and where the body stood in the last of them.
 pub type CollectedView = (Vec<CalibrationFrame>, Placement);
 
+/// Collecting view `view` of `views` (0: facing the sensor, 1: turned to the side):
+/// `frames` good frames of `need`, and, when the last frame was not good, what the person
+/// should do. (The collector's progress and the plugin's status both.)
+#[derive(Clone, Debug, PartialEq)]
+pub struct Collecting {
+    pub view: usize,
+    pub views: usize,
+    pub frames: usize,
+    pub need: usize,
+    pub hint: Option<String>,
+}
+
 /// Where the collection is after a frame.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Progress {
-    /// Collecting view `view` of `views` (0: facing the sensor): `frames` of `need`, and,
-    /// when the last frame was not good, what the person should do.
-    Collecting {
-        view: usize,
-        views: usize,
-        frames: usize,
-        need: usize,
-        hint: Option<String>,
-    },
+    Collecting(Collecting),
     /// Every view is collected: [`Collector::take_views`] hands them over.
     Complete,
 }
@@ -130,13 +134,13 @@ impl Collector {
 
     /// The progress with `frames` in the current view.
     pub fn collecting(&self, frames: usize, hint: Option<String>) -> Progress {
-        Progress::Collecting {
+        Progress::Collecting(Collecting {
             view: self.done.len(),
             views: self.settings.views.max(1),
             frames,
             need: self.settings.need,
             hint,
-        }
+        })
     }
 
     /// The whole collection starts again (from the front view), and says why.

@@ -17,7 +17,7 @@ use fitroom_schedule::FitroomSystems;
 use fitroom_tracker::plugin::{TrackedSkeleton, UserMap};
 
 use crate::MeasureError;
-use crate::calibration::{Collector, Progress};
+use crate::calibration::{Collecting, Collector, Progress};
 use crate::fit::{FitSettings, ViewPose};
 use crate::person::{PersonMeasurement, measure_person};
 use crate::prior::ShapePrior;
@@ -36,16 +36,8 @@ pub enum CalibrationStatus {
     /// Not measuring (nobody to measure, or the kiosk is not calibrating).
     #[default]
     Idle,
-    /// Collecting good frames of view `view` of `views` (0: facing the sensor, 1: turned
-    /// to the side): how many of how many, and, when the last frame was not good, what the
-    /// person should do.
-    Collecting {
-        view: usize,
-        views: usize,
-        frames: usize,
-        need: usize,
-        hint: Option<String>,
-    },
+    /// Collecting good frames, and what the person should do when the last was not good.
+    Collecting(Collecting),
     /// The body is being fitted (off the main schedule).
     Fitting,
     /// Measured: [`BodyMeasurements`] holds the result.
@@ -116,13 +108,9 @@ impl Calibration {
     /// The share of the calibration's frames collected, 0..1 (over all its views).
     pub fn progress(&self) -> f32 {
         match &self.status {
-            CalibrationStatus::Collecting {
-                view,
-                views,
-                frames,
-                need,
-                ..
-            } => (view * need + frames) as f32 / (views * need).max(1) as f32,
+            CalibrationStatus::Collecting(c) => {
+                (c.view * c.need + c.frames) as f32 / (c.views * c.need).max(1) as f32
+            }
             CalibrationStatus::Fitting | CalibrationStatus::Done => 1.0,
             CalibrationStatus::Idle => 0.0,
         }
@@ -132,19 +120,7 @@ impl Calibration {
 impl From<Progress> for CalibrationStatus {
     fn from(p: Progress) -> Self {
         match p {
-            Progress::Collecting {
-                view,
-                views,
-                frames,
-                need,
-                hint,
-            } => Self::Collecting {
-                view,
-                views,
-                frames,
-                need,
-                hint,
-            },
+            Progress::Collecting(c) => Self::Collecting(c),
             Progress::Complete => Self::Fitting,
         }
     }

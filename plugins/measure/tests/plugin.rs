@@ -13,7 +13,7 @@ use fitroom_body::{BodyModel, Shape};
 use fitroom_depth::DepthFrame;
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_depth::synthetic::NoiseSettings;
-use fitroom_measure::calibration::TURN_HINT;
+use fitroom_measure::calibration::{Collecting, TURN_HINT};
 use fitroom_measure::eval::{Recording, Stance, TURN_DEG, record};
 use fitroom_measure::plugin::{BodyMeasurements, Calibration, CalibrationStatus, MeasurePlugin};
 use fitroom_sensor::plugin::SensorFeed;
@@ -60,7 +60,7 @@ fn settle(app: &mut App) {
 
 fn hint(app: &App) -> Option<String> {
     match &app.world().resource::<Calibration>().status {
-        CalibrationStatus::Collecting { hint, .. } => hint.clone(),
+        CalibrationStatus::Collecting(c) => c.hint.clone(),
         _ => None,
     }
 }
@@ -144,6 +144,17 @@ fn a_person_standing_still_is_measured_and_the_avatar_takes_their_shape() {
 }
 
 /// Two people in view: nothing is measured, and the kiosk is told why.
+/// A third of a second of the empty room (the person stepped out of view).
+fn nobody_in_view(app: &mut App, model: &BodyModel) {
+    let mut room = Stance::drawn(8);
+    room.offset_m = 6.0; // out of the camera's view
+    let empty = filmed(model, &Shape::default(), room, 9);
+    for f in &empty.frames[..10] {
+        feed(app, &f.depth);
+        settle(app);
+    }
+}
+
 #[test]
 fn two_people_in_view_are_not_measured() {
     let model = model();
@@ -204,19 +215,11 @@ fn a_calibration_interrupted_by_leaving_starts_again() {
         Stance::drawn(8).turned(TURN_DEG),
         10,
     );
-    let empty = {
-        let mut room = Stance::drawn(8);
-        room.offset_m = 6.0; // out of the camera's view
-        filmed(&model, &Shape::default(), room, 9)
-    };
     let mut app = app(&model);
     for f in &rec.frames[..20] {
         feed(&mut app, &f.depth);
     }
-    for f in &empty.frames[..10] {
-        feed(&mut app, &f.depth);
-        settle(&mut app);
-    }
+    nobody_in_view(&mut app, &model);
     assert!(!app.world().contains_resource::<BodyMeasurements>());
     let h = hint(&app).expect("a hint while nobody is there");
     assert!(h.contains("Step in front"), "{h}");
@@ -247,7 +250,7 @@ fn a_person_partly_out_of_view_is_not_measured_and_told_why() {
         feed(&mut app, &f.depth);
         settle(&mut app);
         hints.extend(hint(&app));
-        if let CalibrationStatus::Collecting { view, frames, .. } =
+        if let CalibrationStatus::Collecting(Collecting { view, frames, .. }) =
             &app.world().resource::<Calibration>().status
         {
             let (view, frames) = (*view, *frames);
@@ -266,15 +269,7 @@ fn a_person_partly_out_of_view_is_not_measured_and_told_why() {
     // They step out and come back into the middle (the interrupted calibration's person and
     // frames, below). (Put in the middle from one frame to the next, the tracker carried its
     // aside pose over and the calibration kept restarting.)
-    let empty = {
-        let mut room = Stance::drawn(8);
-        room.offset_m = 6.0; // out of the camera's view
-        filmed(&model, &Shape::default(), room, 9)
-    };
-    for f in &empty.frames[..10] {
-        feed(&mut app, &f.depth);
-        settle(&mut app);
-    }
+    nobody_in_view(&mut app, &model);
     let rec = filmed(&model, &Shape::default(), Stance::drawn(8), 8);
     let turned = filmed(
         &model,
