@@ -103,3 +103,28 @@ fn a_dump_too_short_for_a_calibration_says_what_is_missing() {
     );
     let _ = std::fs::remove_dir_all(&dir);
 }
+
+/// The evaluation's options out of range are refused before any work, each named with its
+/// range; detail with a garment is refused with why.
+#[test]
+fn evaluation_options_out_of_range_are_named() {
+    for (args, said) in [
+        (&["--detail", "80"][..], "--detail 80 is out of range"),
+        (
+            &["--outside-weight", "0"][..],
+            "--outside-weight 0 is out of range",
+        ),
+        (&["--frames", "2"][..], "--frames 2 is too few"),
+        (
+            &["--detail", "4", "--garment", "assets/garments/tshirt.ron"][..],
+            "--detail with --garment is not supported",
+        ),
+    ] {
+        let mut all = vec!["measure", "eval", "--subjects", "1"];
+        all.extend_from_slice(args);
+        let out = fitroom(&all);
+        assert!(!out.status.success(), "{args:?} accepted");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert!(err.contains(said), "{args:?}: {err}");
+    }
+}

@@ -10,7 +10,9 @@ use anyhow::{Context, Result, bail};
 use clap::Subcommand;
 use fitroom_body::SizeChart;
 use fitroom_body::ansur::{read_survey, sample};
-use fitroom_measure::eval::{EvalOptions, MeasureReport, PoseSource, evaluate, held_out, training};
+use fitroom_measure::eval::{
+    Detailer, EvalOptions, MeasureReport, PoseSource, evaluate, held_out, training,
+};
 use fitroom_measure::prior::learn;
 use fitroom_measure::{FitSettings, ShapePrior};
 
@@ -74,7 +76,8 @@ pub struct EvalArgs {
     #[command(flatten)]
     pub survey: SurveyArgs,
     /// Where the pose and the person's pixels come from: `tracker` (our tracker on the
-    /// frames, as in the kiosk) or `truth` (the filmed pose: the measurement alone).
+    /// frames, as in the kiosk), `truth` (the filmed pose: the measurement alone) or
+    /// `tracker-pixels` (the tracker's pixels, the fit started from the filmed pose).
     #[arg(long, value_enum, default_value = "tracker")]
     pub pose: PoseArg,
     /// Calibration frames per view (30: one second).
@@ -93,6 +96,11 @@ pub struct EvalArgs {
     /// see docs/measure.md).
     #[arg(long, default_value_t = 1.0)]
     pub outside_weight: f32,
+    /// Give each body detail no shape slider has: its chest, waist, hip, upper arms, thighs
+    /// and shanks each scaled about their axis by up to this many per cent (drawn per
+    /// subject); 0: the slider bodies themselves.
+    #[arg(long, default_value_t = 0.0)]
+    pub detail: f32,
     /// Print the report as JSON (every subject) instead of the summary.
     #[arg(long)]
     pub json: bool,
@@ -111,6 +119,9 @@ pub struct EvalArgs {
 pub enum PoseArg {
     Tracker,
     Truth,
+    /// The tracker's pixels with the filmed pose as the fit's start (a diagnosis: the
+    /// tracker's pose's share of the error).
+    TrackerPixels,
 }
 
 pub fn run(command: MeasureCommand) -> Result<()> {
@@ -208,7 +219,27 @@ fn eval(args: EvalArgs) -> Result<()> {
             fitroom_measure::MIN_FRAMES
         );
     }
+    if !(0.0..50.0).contains(&args.detail) {
+        bail!(
+            "--detail {} is out of range: give a girth change in per cent, 0 to 50",
+            args.detail
+        );
+    }
+    if args.detail > 0.0 && args.garment.is_some() {
+        bail!(
+            "--detail with --garment is not supported: the garment is settled on the slider body, \
+             not on the detailed one; give one of them"
+        );
+    }
     let model = s.body.load()?;
+    let detail = if args.detail > 0.0 {
+        Some(std::sync::Arc::new(
+            Detailer::new(&model, args.detail / 100.0)
+                .context("cannot segment the body model for --detail")?,
+        ))
+    } else {
+        None
+    };
     let prior = ShapePrior::shipped()?;
     let all = survey(&s.data)?;
     let pool = held_out(&all);
@@ -238,12 +269,14 @@ fn eval(args: EvalArgs) -> Result<()> {
             pose: match args.pose {
                 PoseArg::Tracker => PoseSource::Tracker,
                 PoseArg::Truth => PoseSource::Truth,
+                PoseArg::TrackerPixels => PoseSource::TrackerPixels,
             },
             frames: args.frames,
             turn_deg: args.turn,
             seed: s.seed,
             threads: s.threads,
             garment,
+            detail,
         },
         &|_, _| progress.inc(1),
     );
@@ -273,9 +306,17 @@ pub fn markdown(r: &MeasureReport) -> String {
     let mut md = String::new();
     let _ = writeln!(
         md,
-        "{} ANSUR II subjects (held out from the prior; seed {}){}, {} calibration frames {}, pose from {}; {} failed.\n",
+        "{} ANSUR II subjects (held out from the prior; seed {}){}{}, {} calibration frames {}, pose from {}; {} failed.\n",
         r.subjects,
         r.seed,
+        if r.detail > 0.0 {
+            format!(
+                " with detail (segment girths scaled by up to ±{:.0} %)",
+                r.detail * 100.0
+            )
+        } else {
+            String::new()
+        },
         r.garment
             .as_ref()
             .map_or(String::new(), |g| format!(" wearing the {g} in their size")),

@@ -62,6 +62,8 @@ pub enum MeasureError {
         "too few of the person's pixels have depth ({points}; at least {need}): too far, or mostly out of view"
     )]
     TooFewPoints { points: usize, need: usize },
+    #[error("a body mesh of {got} vertices was given, the body model has {expected}")]
+    MeshSize { got: usize, expected: usize },
     #[error("a body shape cannot be made: {0}")]
     Shape(#[from] ShapeError),
     #[error("the fitted body cannot be measured: {0}")]

@@ -226,14 +226,25 @@ impl<'a> Posing<'a> {
     pub fn body(&self, shape: &Shape, placement: &Placement) -> Result<PosedBody, ShapeError> {
         let weights = shape.target_weights(self.model)?;
         let positions = self.model.apply_targets(&weights);
+        Ok(self.body_of(weights, positions, placement))
+    }
+
+    /// The rest mesh `positions` (whole mesh: a shape's, whose target weights are `weights`,
+    /// perhaps with detail no shape has) in this pose, placed.
+    pub fn body_of(
+        &self,
+        weights: Vec<(usize, f32)>,
+        positions: Vec<Vec3>,
+        placement: &Placement,
+    ) -> PosedBody {
         let rest = self.model.rest_pose(&positions);
         let vertices = self.place(&positions, &rest, placement);
-        Ok(PosedBody {
+        PosedBody {
             weights,
             positions,
             rest,
             vertices,
-        })
+        }
     }
 
     /// Target weights as one weight per target of the model.

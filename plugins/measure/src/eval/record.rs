@@ -110,20 +110,49 @@ pub struct Worn {
     pub triangles: Vec<[u32; 3]>,
 }
 
-/// Films the body of `shape` in `stance` for `frames` frames (30 Hz) with the sensor's
+/// The body filmed: a shape of the model, and perhaps its rest mesh with detail no shape
+/// has ([`super::detail`]).
+#[derive(Clone, Copy, Debug)]
+pub struct Filmed<'a> {
+    pub shape: &'a Shape,
+    /// The rest mesh (whole mesh) to film instead of the shape's own.
+    pub detailed: Option<&'a [Vec3]>,
+}
+
+impl<'a> From<&'a Shape> for Filmed<'a> {
+    fn from(shape: &'a Shape) -> Self {
+        Self {
+            shape,
+            detailed: None,
+        }
+    }
+}
+
+/// Films `body` in `stance` for `frames` frames (30 Hz) with the sensor's
 /// `noise` (the published model: [`NoiseSettings::default`]), seeded by `seed`; wearing
 /// `worn` if given (the garment moves with the body).
-pub fn record(
+pub fn record<'a>(
     model: &BodyModel,
-    shape: &Shape,
+    body: impl Into<Filmed<'a>>,
     stance: &Stance,
     frames: usize,
     noise: NoiseSettings,
     seed: u64,
     worn: Option<&Worn>,
 ) -> Result<Recording, MeasureError> {
-    let rest_body = model.shaped(shape)?;
-    let locals = calibration_pose(model, &rest_body.rest_pose, stance);
+    let filmed = body.into();
+    let weights = filmed.shape.target_weights(model)?;
+    let positions = match filmed.detailed {
+        Some(p) if p.len() == model.positions.len() => p.to_vec(),
+        Some(p) => {
+            return Err(MeasureError::MeshSize {
+                got: p.len(),
+                expected: model.positions.len(),
+            });
+        }
+        None => model.apply_targets(&weights),
+    };
+    let locals = calibration_pose(model, &model.rest_pose(&positions), stance);
     let posing = Posing::new(model, locals.clone());
     let turn = Quat::from_rotation_y(stance.yaw_deg.to_radians()) * MODEL_TO_SENSOR;
     let floor_y = -stance.sensor_height_m;
@@ -132,7 +161,7 @@ pub fn record(
         rotation: turn,
         pelvis: Vec3::ZERO,
     };
-    let at_origin = posing.body(shape, &probe)?;
+    let at_origin = posing.body_of(weights, positions, &probe);
     let sole = at_origin
         .vertices
         .iter()
@@ -169,7 +198,7 @@ pub fn record(
             pelvis: placement.pelvis + sway,
             ..placement
         };
-        let posed = posing.body(shape, &now)?;
+        let posed = posing.repose(&at_origin, &now);
         let joints = posing.kinect_joints(&posed, &now);
         // The body's mesh is added once; each frame moves its vertices.
         if scene.meshes.len() == scene.still {

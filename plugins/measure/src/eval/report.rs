@@ -5,11 +5,14 @@ use std::time::Instant;
 
 use fitroom_body::ansur::AnsurSubject;
 pub use fitroom_body::ansur::MeasureStats;
-use fitroom_body::{BodyModel, FitOptions, FitRequest, Measure, Measurements, SizeChart, fit};
+use fitroom_body::{
+    BodyModel, BodySegment, FitOptions, FitRequest, Measure, Measurements, SizeChart, fit,
+};
 use serde::{Deserialize, Serialize};
 
+use super::detail::Detailer;
 use super::dressed::{DressOptions, worn};
-use super::record::{Stance, TURN_DEG, record};
+use super::record::{Filmed, Stance, TURN_DEG, record};
 use crate::fit::FitSettings;
 use crate::fit::ViewPose;
 use crate::garment_size::garment_chart;
@@ -57,6 +60,10 @@ pub enum PoseSource {
     Truth,
     /// Our tracker's pose, pixels and skeleton over the same frames (the product's chain).
     Tracker,
+    /// Our tracker's pixels, skeleton and floor, the fit started from the filmed pose and
+    /// placement: the tracker's pixels alone (the pose's share of the error is the
+    /// difference to `Tracker`).
+    TrackerPixels,
 }
 
 /// One subject measured.
@@ -94,6 +101,10 @@ pub struct SubjectResult {
     /// Both genders' fits, the kept one first (what the choice between them saw).
     #[serde(default)]
     pub fits: Vec<GenderFit>,
+    /// The radial scale of each segment given detail ([`EvalOptions::detail`]); empty: the
+    /// slider body itself.
+    #[serde(default)]
+    pub detail: Vec<(BodySegment, f32)>,
     pub error: Option<String>,
 }
 
@@ -127,6 +138,10 @@ pub struct MeasureReport {
     pub turn_deg: f32,
     /// The garment the subjects wore, if any.
     pub garment: Option<String>,
+    /// The largest relative change of a segment's girth in the bodies' detail (0: slider
+    /// bodies, which the fit can match exactly; see [`EvalOptions::detail`]).
+    #[serde(default)]
+    pub detail: f32,
     /// Where the pose came from ("truth": the filmed pose).
     pub pose: String,
     pub ours: Vec<MeasureStats>,
@@ -164,6 +179,10 @@ pub struct EvalOptions {
     pub seed: u64,
     /// Subjects measured at once.
     pub threads: usize,
+    /// Detail the fit cannot express, added to each slider body before it is filmed (and
+    /// measured for the truth); none: the slider bodies.
+    #[serde(skip)]
+    pub detail: Option<Arc<Detailer>>,
 }
 
 impl Default for EvalOptions {
@@ -175,6 +194,7 @@ impl Default for EvalOptions {
             seed: 1,
             threads: 2,
             garment: None,
+            detail: None,
         }
     }
 }
@@ -244,6 +264,7 @@ fn one(
         view_rms_mm: Vec::new(),
         turned_dropped: false,
         fits: Vec::new(),
+        detail: Vec::new(),
         error: None,
     };
     let request = FitRequest {
@@ -253,11 +274,21 @@ fn one(
     };
     let mut garment_size: Option<String> = None;
     let mut views_seen: (Vec<f32>, bool) = (Vec::new(), false);
+    let mut detail = Vec::new();
     let mut run =
         || -> Result<(Measurements, PersonMeasurement, seed::SeedMeasurement, f64), String> {
             let shape = fit(model, &request, &FitOptions::default())
                 .map_err(|e| e.to_string())?
                 .shape;
+            let detailed = match &options.detail {
+                None => None,
+                Some(detailer) => {
+                    let rest = model.shaped(&shape).map_err(|e| e.to_string())?.positions;
+                    let detailed = detailer.detailed(&rest, seed).map_err(|e| e.to_string())?;
+                    detail = detailed.factors;
+                    Some(detailed.positions)
+                }
+            };
             // Dressed: the garment in the subject's size, settled once on the body in the
             // calibration pose; it turns with the body.
             let worn = match &options.garment {
@@ -292,7 +323,10 @@ fn one(
             for (i, st) in stances.iter().enumerate() {
                 let rec = record(
                     model,
-                    &shape,
+                    Filmed {
+                        shape: &shape,
+                        detailed: detailed.as_deref(),
+                    },
                     st,
                     options.frames,
                     NoiseSettings::default(),
@@ -326,13 +360,21 @@ fn one(
                         .collect::<Result<_, String>>()?;
                     (seen, front)
                 }
-                PoseSource::Tracker => {
+                PoseSource::Tracker | PoseSource::TrackerPixels => {
                     let tracked = filmed
                         .iter()
                         .map(|rec| tracked(model, &rec.frames))
                         .collect::<Result<Vec<_>, _>>()?;
                     let front = tracked[0].0.clone();
-                    let seen = tracked_views(model, &tracked).map_err(|e| e.to_string())?;
+                    let mut seen = tracked_views(model, &tracked).map_err(|e| e.to_string())?;
+                    // The fit's start from the filmed pose: what the tracker's pose
+                    // costs, apart from its pixels.
+                    if options.pose == PoseSource::TrackerPixels {
+                        for (v, rec) in seen.iter_mut().zip(&filmed) {
+                            v.locals.clone_from(&rec.locals);
+                            v.placement = rec.placement;
+                        }
+                    }
                     (seen, front)
                 }
             };
@@ -382,6 +424,7 @@ fn one(
         Err(e) => result.error = Some(e),
     }
     result.garment_size = garment_size;
+    result.detail = detail;
     (result.view_rms_mm, result.turned_dropped) = views_seen;
     result
 }
@@ -461,9 +504,14 @@ fn summarise(results: Vec<SubjectResult>, options: &EvalOptions) -> MeasureRepor
         frames: options.frames,
         turn_deg: options.turn_deg,
         garment: options.garment.as_ref().map(|g| g.name()),
+        detail: options.detail.as_ref().map_or(0.0, |d| d.spread()),
         pose: match options.pose {
             PoseSource::Truth => "filmed pose and body pixels (truth)".into(),
             PoseSource::Tracker => "our tracker (pose, pixels, skeleton)".into(),
+            PoseSource::TrackerPixels => {
+                "our tracker's pixels, skeleton and floor; the filmed pose as the fit's start"
+                    .into()
+            }
         },
         ours,
         seed_method,
