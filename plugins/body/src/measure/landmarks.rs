@@ -383,16 +383,19 @@ impl BodyModel {
                 .last()
                 .ok_or(MeasureError::LandmarkNotFound("shoulder"))?
                 .1;
-            let (s, e) = (Vec2::new(start.x, start.y), Vec2::new(end.x, end.y));
-            let d = (e - s).normalize_or_zero();
+            // The corner: the top farthest above the chord from the slope's highest point
+            // to the arm's end (signed: the neck's slope can sag below the chord, and a
+            // point there, taken by its distance alone, halved the shoulder width of some
+            // bodies).
+            let slope = (end.y - start.y) / (end.x - start.x);
+            let above = |p: &Vec3| p.y - (start.y + (p.x - start.x) * slope);
+            if !slope.is_finite() {
+                return Err(MeasureError::LandmarkNotFound("acromion"));
+            }
             tops.iter()
                 .copied()
                 .filter(|(_, p)| (p.x - start.x) * sign > 0.0)
-                .max_by(|(_, a), (_, b)| {
-                    let da = d.perp_dot(Vec2::new(a.x, a.y) - s).abs();
-                    let db = d.perp_dot(Vec2::new(b.x, b.y) - s).abs();
-                    da.total_cmp(&db)
-                })
+                .max_by(|(_, a), (_, b)| above(a).total_cmp(&above(b)))
                 .map(|(v, _)| v)
                 .ok_or(MeasureError::LandmarkNotFound("acromion"))
         };
