@@ -143,19 +143,7 @@ fn garments_survive_a_teleport_a_spin_and_arms_through_the_torso() {
 
         let arm_of = |root: &str| -> Vec<bool> {
             let r = bone(&model, root);
-            (0..bones)
-                .map(|mut i| {
-                    loop {
-                        if i == r {
-                            break true;
-                        }
-                        match model.bones[i].parent {
-                            Some(p) => i = p,
-                            None => break false,
-                        }
-                    }
-                })
-                .collect()
+            (0..bones).map(|i| model.descends_from(i, r)).collect()
         };
         let (left, right) = (arm_of("upperarm_l"), arm_of("upperarm_r"));
         let base = spin(steps_per_s);

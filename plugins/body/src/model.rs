@@ -117,6 +117,20 @@ impl BodyModel {
         self.bones.iter().position(|b| b.name == name)
     }
 
+    /// Whether `bone` is `ancestor` or hangs below it in the rig (turning `ancestor` carries
+    /// it). An index outside the rig descends from nothing.
+    pub fn descends_from(&self, mut bone: usize, ancestor: usize) -> bool {
+        loop {
+            if bone == ancestor {
+                return bone < self.bones.len();
+            }
+            match self.bones.get(bone).and_then(|b| b.parent) {
+                Some(p) => bone = p,
+                None => return false,
+            }
+        }
+    }
+
     /// Index of the morph target called `name` (e.g. `arms/measure-lowerarm-length-incr`).
     pub fn target_index(&self, name: &str) -> Option<usize> {
         self.targets.iter().position(|t| t.name == name)

@@ -299,21 +299,7 @@ impl<'a> Posing<'a> {
 pub fn carried_weights(m: &BodyModel, bones: &[usize], count: usize) -> Vec<f32> {
     let carries: Vec<Vec<bool>> = bones
         .iter()
-        .map(|&b| {
-            (0..m.bones.len())
-                .map(|mut j| {
-                    loop {
-                        if j == b {
-                            break true;
-                        }
-                        match m.bones[j].parent {
-                            Some(p) => j = p,
-                            None => break false,
-                        }
-                    }
-                })
-                .collect()
-        })
+        .map(|&b| (0..m.bones.len()).map(|j| m.descends_from(j, b)).collect())
         .collect();
     let mut out = vec![0.0f32; count * bones.len()];
     for (v, (joints, weights)) in m

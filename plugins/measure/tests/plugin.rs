@@ -143,7 +143,6 @@ fn a_person_standing_still_is_measured_and_the_avatar_takes_their_shape() {
     );
 }
 
-/// Two people in view: nothing is measured, and the kiosk is told why.
 /// A third of a second of the empty room (the person stepped out of view).
 fn nobody_in_view(app: &mut App, model: &BodyModel) {
     let mut room = Stance::drawn(8);
@@ -155,6 +154,26 @@ fn nobody_in_view(app: &mut App, model: &BodyModel) {
     }
 }
 
+/// A person stands in the middle, still, facing and then turned (the calibration's two
+/// views), until the app has measured them.
+fn stand_in_the_middle_until_measured(app: &mut App, model: &BodyModel) {
+    let rec = filmed(model, &Shape::default(), Stance::drawn(8), 8);
+    let turned = filmed(
+        model,
+        &Shape::default(),
+        Stance::drawn(8).turned(TURN_DEG),
+        10,
+    );
+    for f in rec.frames.iter().chain(&turned.frames) {
+        feed(app, &f.depth);
+        settle(app);
+        if app.world().contains_resource::<BodyMeasurements>() {
+            break;
+        }
+    }
+}
+
+/// Two people in view: nothing is measured, and the kiosk is told why.
 #[test]
 fn two_people_in_view_are_not_measured() {
     let model = model();
@@ -209,12 +228,6 @@ fn two_people_in_view_are_not_measured() {
 fn a_calibration_interrupted_by_leaving_starts_again() {
     let model = model();
     let rec = filmed(&model, &Shape::default(), Stance::drawn(8), 8);
-    let turned = filmed(
-        &model,
-        &Shape::default(),
-        Stance::drawn(8).turned(TURN_DEG),
-        10,
-    );
     let mut app = app(&model);
     for f in &rec.frames[..20] {
         feed(&mut app, &f.depth);
@@ -223,13 +236,7 @@ fn a_calibration_interrupted_by_leaving_starts_again() {
     assert!(!app.world().contains_resource::<BodyMeasurements>());
     let h = hint(&app).expect("a hint while nobody is there");
     assert!(h.contains("Step in front"), "{h}");
-    for f in rec.frames.iter().chain(&turned.frames) {
-        feed(&mut app, &f.depth);
-        settle(&mut app);
-        if app.world().contains_resource::<BodyMeasurements>() {
-            break;
-        }
-    }
+    stand_in_the_middle_until_measured(&mut app, &model);
     assert!(app.world().contains_resource::<BodyMeasurements>());
 }
 
@@ -266,24 +273,10 @@ fn a_person_partly_out_of_view_is_not_measured_and_told_why() {
         hints.iter().any(|h| h.contains("step to the middle")),
         "hints: {hints:?}"
     );
-    // They step out and come back into the middle (the interrupted calibration's person and
-    // frames, below). (Put in the middle from one frame to the next, the tracker carried its
-    // aside pose over and the calibration kept restarting.)
+    // They step out and come back into the middle. (Put in the middle from one frame to the
+    // next, the tracker carried its aside pose over and the calibration kept restarting.)
     nobody_in_view(&mut app, &model);
-    let rec = filmed(&model, &Shape::default(), Stance::drawn(8), 8);
-    let turned = filmed(
-        &model,
-        &Shape::default(),
-        Stance::drawn(8).turned(TURN_DEG),
-        10,
-    );
-    for f in rec.frames.iter().chain(&turned.frames) {
-        feed(&mut app, &f.depth);
-        settle(&mut app);
-        if app.world().contains_resource::<BodyMeasurements>() {
-            break;
-        }
-    }
+    stand_in_the_middle_until_measured(&mut app, &model);
     assert!(
         app.world().contains_resource::<BodyMeasurements>(),
         "measured once in view; hints before: {hints:?}"

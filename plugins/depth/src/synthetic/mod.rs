@@ -32,7 +32,7 @@ use crate::camera::{DepthCamera, PIXELS, WIDTH};
 use crate::frame::DepthFrame;
 pub use raster::DepthBuffer;
 use readings::NoiseTables;
-pub use readings::splitmix64;
+pub use readings::{next_unit, splitmix64};
 use spans::Spans;
 use still::{Layer, Still};
 

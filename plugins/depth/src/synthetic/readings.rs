@@ -368,6 +368,14 @@ pub fn splitmix64(x: u64) -> u64 {
     z ^ (z >> 31)
 }
 
+/// Steps the SplitMix64 sequence at `state` and reads the step as a number in [0, 1]
+/// (53 bits rounded to an f32).
+#[inline]
+pub fn next_unit(state: &mut u64) -> f32 {
+    *state = splitmix64(*state);
+    (*state >> 11) as f32 / (1u64 << 53) as f32
+}
+
 /// The level whose σ is nearest above `sigma` px (levels step 0.02 px from 0.8 px).
 fn lateral_level(sigma: f32) -> u8 {
     (((sigma - 0.8) / 0.02).ceil().max(0.0) as usize).min(LATERAL_LEVELS - 1) as u8

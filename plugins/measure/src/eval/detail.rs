@@ -9,7 +9,7 @@ use fitroom_body::{
     AreaBlend, BodyModel, BodySegment, BodySegmentation, Decay, Propagation, SegmentEdit,
     SegmentError, SegmentTarget,
 };
-use fitroom_depth::synthetic::splitmix64;
+use fitroom_depth::synthetic::next_unit;
 use glam::Vec3;
 
 /// The segments scaled, a left and right pair by one factor (people are nearly symmetric).
@@ -67,25 +67,20 @@ impl Detailer {
     /// scaled about its axis by a factor drawn from `seed`.
     pub fn detailed(&self, positions: &[Vec3], seed: u64) -> Result<Detailed, SegmentError> {
         let mut state = seed ^ 0xde7a_11ed;
-        let mut edits = Vec::new();
+        let mut factors = Vec::new();
         for group in GROUPS {
-            state = splitmix64(state);
-            let uniform = (state >> 11) as f32 / (1u64 << 53) as f32;
-            let factor = 1.0 + self.spread * (2.0 * uniform - 1.0);
-            edits.extend(group.iter().map(|&segment| SegmentEdit {
+            let factor = 1.0 + self.spread * (2.0 * next_unit(&mut state) - 1.0);
+            factors.extend(group.iter().map(|&segment| (segment, factor)));
+        }
+        let edits: Vec<SegmentEdit> = factors
+            .iter()
+            .map(|&(segment, factor)| SegmentEdit {
                 segment,
                 target: SegmentTarget::RadialScale { factor },
                 amount: 1.0,
-            }));
-        }
-        let positions = self.segmentation.morph(&self.blend, positions, &edits)?;
-        let factors = edits
-            .iter()
-            .map(|e| match e.target {
-                SegmentTarget::RadialScale { factor } => (e.segment, factor),
-                SegmentTarget::Positions(_) => (e.segment, 1.0),
             })
             .collect();
+        let positions = self.segmentation.morph(&self.blend, positions, &edits)?;
         Ok(Detailed { positions, factors })
     }
 }

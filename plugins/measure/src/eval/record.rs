@@ -5,7 +5,7 @@
 
 use fitroom_body::{BodyModel, MODEL_TO_SENSOR, RestPose, Shape, forward_kinematics};
 use fitroom_depth::synthetic::{
-    Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, splitmix64,
+    Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, next_unit,
 };
 use fitroom_depth::{DepthCamera, HEIGHT};
 use glam::{Quat, Vec3};
@@ -40,10 +40,7 @@ impl Stance {
     /// the sensor 0.9-1.0 m high.
     pub fn drawn(seed: u64) -> Self {
         let mut state = seed ^ 0x5eed_5eed;
-        let mut uniform = || {
-            state = splitmix64(state);
-            (state >> 11) as f32 / (1u64 << 53) as f32
-        };
+        let mut uniform = || next_unit(&mut state);
         Self {
             distance_m: 2.5 + 0.5 * uniform(),
             offset_m: (uniform() - 0.5) * 0.5,
