@@ -13,6 +13,7 @@ use serde::Serialize;
 pub mod app;
 pub mod body;
 pub mod cloth;
+pub mod gesture;
 pub mod import;
 pub mod measure;
 pub mod measure_dump;
@@ -77,6 +78,11 @@ pub enum Command {
         #[command(subcommand)]
         command: measure::MeasureCommand,
     },
+    /// Hand gestures: the hand-state classifiers on synthetic hands.
+    Gesture {
+        #[command(subcommand)]
+        command: gesture::GestureCommand,
+    },
 }
 
 /// Runs a parsed command line (the kiosk when it names no command).
@@ -98,6 +104,7 @@ pub fn run(cli: Cli) -> Result<()> {
         Command::Motion { command } => motion::run(command),
         Command::Track { command } => track::run(command),
         Command::Measure { command } => measure::run(command),
+        Command::Gesture { command } => gesture::run(command),
     }
 }
 

@@ -1,0 +1,24 @@
+//! Hands from depth and the gestures made with them: whether a hand is open or closed
+//! ([`hand`]: seed 000's App. C method and ours), synthetic hands to train and test them on
+//! ([`synth`]).
+#![forbid(unsafe_code)]
+
+pub mod eval;
+pub mod hand;
+pub mod synth;
+
+/// Which hand.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub enum HandSide {
+    Left,
+    Right,
+}
+
+/// What a hand is doing.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+pub enum HandState {
+    Open,
+    Closed,
+    /// Not seen well enough to say (out of view, against the body, too far).
+    Unknown,
+}
