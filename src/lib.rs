@@ -348,6 +348,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             },
             fitroom_tracker::plugin::TrackerPlugin,
             fitroom_measure::plugin::MeasurePlugin,
+            fitroom_gesture::plugin::GesturePlugin,
         ))
         .add_plugins(fitroom_body::reload::BodyFilePlugin {
             file: options.body.clone(),

@@ -271,6 +271,8 @@ impl AssetLoader for KioskConfigLoader {
 #[derive(Resource, Debug)]
 pub struct ActiveKioskConfig {
     pub config: KioskConfig,
+    /// The configuration file's folder: its garment files are relative to it.
+    pub folder: PathBuf,
     pub handle: Option<Handle<KioskConfig>>,
     pub error: Option<String>,
 }

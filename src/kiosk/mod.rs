@@ -141,8 +141,14 @@ pub struct KioskPlugin {
 impl Plugin for KioskPlugin {
     fn build(&self, app: &mut App) {
         fitroom_schedule::ensure(app);
+        let folder = self
+            .config_path
+            .parent()
+            .map(std::path::Path::to_path_buf)
+            .unwrap_or_default();
         let mut active = config::ActiveKioskConfig {
             config: self.config.clone(),
+            folder,
             handle: None,
             error: None,
         };
@@ -188,6 +194,7 @@ impl Plugin for KioskPlugin {
                 ),
             );
         measure::add(app);
+        actions::add(app);
         if app.is_plugin_added::<bevy::gizmos::GizmoPlugin>() {
             app.add_systems(Startup, skeletons_on_top)
                 .add_systems(PostUpdate, draw_debug_skeletons.in_set(KioskSystems::Debug));
@@ -308,6 +315,7 @@ pub fn snap_camera(world: &mut World) {
     }
 }
 
+pub mod actions;
 pub mod config;
 pub mod depth_view;
 pub mod guide;

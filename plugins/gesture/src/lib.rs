@@ -3,9 +3,14 @@
 //! ([`synth`]).
 #![forbid(unsafe_code)]
 
+pub mod cursor;
 pub mod eval;
 pub mod hand;
+pub mod swipe;
 pub mod synth;
+
+#[cfg(feature = "plugin")]
+pub mod plugin;
 
 /// Which hand.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
@@ -15,10 +20,13 @@ pub enum HandSide {
 }
 
 /// What a hand is doing.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize)]
+#[derive(
+    Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,
+)]
 pub enum HandState {
     Open,
     Closed,
     /// Not seen well enough to say (out of view, against the body, too far).
+    #[default]
     Unknown,
 }

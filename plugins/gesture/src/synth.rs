@@ -13,21 +13,10 @@ use fitroom_depth::synthetic::{
     Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, next_unit,
 };
 use fitroom_sensor::KinectJoint;
+use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
 use glam::{Quat, Vec3};
 
 use crate::{HandSide, HandState};
-
-/// The rig bones at the Kinect joints the gesture code reads (the tracker's own mapping).
-const JOINT_BONES: [(KinectJoint, &str); 8] = [
-    (KinectJoint::ShoulderCenter, "neck_01"),
-    (KinectJoint::Head, "head"),
-    (KinectJoint::ElbowLeft, "lowerarm_l"),
-    (KinectJoint::WristLeft, "hand_l"),
-    (KinectJoint::HandLeft, "middle_01_l"),
-    (KinectJoint::ElbowRight, "lowerarm_r"),
-    (KinectJoint::WristRight, "hand_r"),
-    (KinectJoint::HandRight, "middle_01_r"),
-];
 
 /// How a synthetic hand is shown (drawn per sample from a seed by [`HandPose::drawn`]).
 #[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
@@ -114,7 +103,7 @@ impl HandPose {
 pub struct HandShot {
     pub pose: HandPose,
     pub frame: fitroom_depth::DepthFrame,
-    /// The Kinect joints (sensor space, metres): exact.
+    /// The 20 Kinect joints (sensor space, metres; the tracker's rig bones): exact.
     pub joints: [Vec3; KinectJoint::COUNT],
     /// What each pixel sees (the synthetic camera's labels, before noise).
     pub labels: std::sync::Arc<[u8]>,
@@ -176,7 +165,7 @@ impl<'a> HandStudio<'a> {
         for (joint, bone) in JOINT_BONES {
             let mut p = head(bone);
             if joint == KinectJoint::Head {
-                p += (p - head("neck_01")).normalize_or_zero() * 0.09;
+                p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
             }
             joints[joint.index()] = to_sensor(p);
         }
@@ -374,4 +363,35 @@ fn hand_frame(
         radial.cross(along)
     };
     Some((palm.try_normalize()?, along, radial))
+}
+
+/// The 20 Kinect joints (sensor space) of `shape` standing in the rig's rest pose, turned
+/// `yaw_deg` from facing the sensor, its pelvis at `pelvis`.
+pub fn standing_joints(
+    model: &BodyModel,
+    shape: &Shape,
+    pelvis: Vec3,
+    yaw_deg: f32,
+) -> Result<[Vec3; KinectJoint::COUNT], ShapeError> {
+    let weights = shape.target_weights(model)?;
+    let positions = model.apply_targets(&weights);
+    let rest = model.rest_pose(&positions);
+    let globals = forward_kinematics(&model.bones, &rest, &[], Vec3::ZERO);
+    let head = |name: &str| {
+        model
+            .bone_index(name)
+            .and_then(|b| globals.get(b))
+            .map_or(Vec3::ZERO, |g| g.translation)
+    };
+    let turn = Quat::from_rotation_y(yaw_deg.to_radians()) * MODEL_TO_SENSOR;
+    let root = head("pelvis");
+    let mut joints = [Vec3::ZERO; KinectJoint::COUNT];
+    for (joint, bone) in JOINT_BONES {
+        let mut p = head(bone);
+        if joint == KinectJoint::Head {
+            p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
+        }
+        joints[joint.index()] = pelvis + turn * (p - root);
+    }
+    Ok(joints)
 }

@@ -36,6 +36,17 @@ pub enum KinectJoint {
 impl KinectJoint {
     pub const COUNT: usize = 20;
 
+    /// The same joint on the body's other side (itself on the midline).
+    pub fn mirror(self) -> KinectJoint {
+        let i = self.index();
+        let m = match i {
+            4..=7 | 12..=15 => i + 4,
+            8..=11 | 16..=19 => i - 4,
+            _ => i,
+        };
+        Self::ALL[m]
+    }
+
     /// All joints in index order.
     pub const ALL: [KinectJoint; 20] = [
         KinectJoint::HipCenter,
@@ -175,4 +186,25 @@ pub fn bone_reference_frame(direction: Vec3) -> Quat {
     let z = (hint - y * hint.dot(y)).normalize_or(Vec3::Z);
     let x = y.cross(z);
     Quat::from_mat3(&glam::Mat3::from_cols(x, y, z)).normalize()
+}
+
+#[cfg(test)]
+mod mirror_tests {
+    use super::KinectJoint;
+
+    #[test]
+    fn mirroring_swaps_sides_by_name_and_is_its_own_inverse() {
+        for j in KinectJoint::ALL {
+            let m = j.mirror();
+            assert_eq!(m.mirror(), j);
+            let (a, b) = (j.name(), m.name());
+            if a.ends_with("_left") {
+                assert_eq!(b, a.replace("_left", "_right"));
+            } else if a.ends_with("_right") {
+                assert_eq!(b, a.replace("_right", "_left"));
+            } else {
+                assert_eq!(m, j);
+            }
+        }
+    }
 }

@@ -1,0 +1,240 @@
+//! The hand cursor: the raised hand's position in an interaction box fixed to the body
+//! (beside the shoulder of that hand, sized by the shoulder width, so a short and a tall
+//! person reach the screen's corners alike), smoothed (the One Euro filter's idea: smooth
+//! when still, quick when moving), mirrored like the mirror (the person's right is the
+//! screen's right); a grip presses, opening releases.
+
+use fitroom_motion::filter::one_euro::smoothing_factor;
+use fitroom_sensor::{KinectJoint, SensorFrame};
+use glam::{Vec2, Vec3};
+
+use crate::swipe::body_frame;
+use crate::{HandSide, HandState};
+
+/// The box and the smoothing.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize, serde::Deserialize)]
+pub struct CursorSettings {
+    /// The box's centre from the shoulder centre: sideways towards the hand's side, and up,
+    /// in shoulder widths; its half width and half height.
+    pub centre_out: f32,
+    pub centre_up: f32,
+    pub half_width: f32,
+    pub half_height: f32,
+    /// A hand this far in front of the shoulders (shoulder widths) drives the cursor.
+    pub min_reach: f32,
+    /// Cutoff at rest and its growth with speed (screen widths per second), Hz.
+    pub min_cutoff_hz: f32,
+    pub beta: f32,
+}
+
+impl Default for CursorSettings {
+    fn default() -> Self {
+        Self {
+            centre_out: 0.5,
+            centre_up: -0.4,
+            half_width: 0.9,
+            half_height: 0.7,
+            min_reach: 0.5,
+            min_cutoff_hz: 1.5,
+            beta: 4.0,
+        }
+    }
+}
+
+/// The cursor this frame.
+#[derive(Clone, Copy, Debug, PartialEq, serde::Serialize)]
+pub struct Cursor {
+    pub hand: HandSide,
+    /// On the screen, 0..1 each way from the top left.
+    pub position: Vec2,
+    /// The hand is closed (a grip presses).
+    pub pressed: bool,
+}
+
+/// A press or a release.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, serde::Serialize)]
+pub enum Click {
+    Press,
+    Release,
+}
+
+/// Follows the raised hand.
+#[derive(Clone, Debug, Default)]
+pub struct CursorTracker {
+    pub settings: CursorSettings,
+    smoothed: Option<(HandSide, Vec2, f64)>,
+    pressed: bool,
+}
+
+impl CursorTracker {
+    pub fn new(settings: CursorSettings) -> Self {
+        Self {
+            settings,
+            ..Self::default()
+        }
+    }
+
+    /// Takes one frame and both hands' states ([left, right]); returns the cursor (`None`:
+    /// no hand raised) and a click if the driving hand closed or opened.
+    pub fn update(
+        &mut self,
+        frame: &SensorFrame,
+        states: [HandState; 2],
+    ) -> (Option<Cursor>, Option<Click>) {
+        let s = self.settings;
+        let Some((centre, right, forward, width)) = body_frame(frame) else {
+            return (None, self.release());
+        };
+        // The driving hand: the raised one reaching furthest forward.
+        let mut best: Option<(HandSide, Vec3, f32)> = None;
+        for (side, joint) in [
+            (HandSide::Left, KinectJoint::HandLeft),
+            (HandSide::Right, KinectJoint::HandRight),
+        ] {
+            let sample = frame.joint(joint);
+            if sample.confidence <= 0.0 || !sample.position.is_finite() {
+                continue;
+            }
+            let reach = (sample.position - centre).dot(forward) / width;
+            if reach >= s.min_reach && best.is_none_or(|b| reach > b.2) {
+                best = Some((side, sample.position, reach));
+            }
+        }
+        let Some((side, hand, _)) = best else {
+            self.smoothed = None;
+            return (None, self.release());
+        };
+        let out = match side {
+            HandSide::Left => -1.0,
+            HandSide::Right => 1.0,
+        };
+        let d = (hand - centre) / width;
+        let x = (d.dot(right) - out * s.centre_out) / s.half_width;
+        let y = (d.y - s.centre_up) / s.half_height;
+        let raw = Vec2::new(0.5 + 0.5 * x, 0.5 - 0.5 * y).clamp(Vec2::ZERO, Vec2::ONE);
+        let t = frame.timestamp_s;
+        let position = match self.smoothed {
+            Some((hand_was, last, t0)) if hand_was == side && t > t0 => {
+                let dt = (t - t0) as f32;
+                let speed = (raw - last).length() / dt;
+                let cutoff = s.min_cutoff_hz + s.beta * speed;
+                let a = smoothing_factor(f64::from(cutoff), f64::from(dt)) as f32;
+                last + (raw - last) * a
+            }
+            _ => raw,
+        };
+        self.smoothed = Some((side, position, t));
+        let closed = states[match side {
+            HandSide::Left => 0,
+            HandSide::Right => 1,
+        }] == HandState::Closed;
+        let opened = states[match side {
+            HandSide::Left => 0,
+            HandSide::Right => 1,
+        }] == HandState::Open;
+        let click = if closed && !self.pressed {
+            self.pressed = true;
+            Some(Click::Press)
+        } else if opened && self.pressed {
+            self.pressed = false;
+            Some(Click::Release)
+        } else {
+            None
+        };
+        (
+            Some(Cursor {
+                hand: side,
+                position,
+                pressed: self.pressed,
+            }),
+            click,
+        )
+    }
+
+    fn release(&mut self) -> Option<Click> {
+        std::mem::take(&mut self.pressed).then_some(Click::Release)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use fitroom_sensor::JointSample;
+    use glam::Quat;
+
+    /// A person 2 m away facing the sensor, the right hand at `hand` (body frame: right,
+    /// up, forward from the shoulder centre, metres).
+    fn frame(t: f64, hand: Vec3) -> SensorFrame {
+        let mut f = SensorFrame {
+            timestamp_s: t,
+            sequence: 0,
+            joints: [JointSample {
+                position: Vec3::new(0.0, 0.0, 2.0),
+                orientation: Quat::IDENTITY,
+                confidence: 1.0,
+            }; KinectJoint::COUNT],
+        };
+        let centre = Vec3::new(0.0, 0.5, 2.0);
+        // Facing the sensor, the person's right is the sensor's +X, forward is -Z.
+        f.joints[KinectJoint::ShoulderCenter.index()].position = centre;
+        f.joints[KinectJoint::ShoulderLeft.index()].position = centre - Vec3::X * 0.18;
+        f.joints[KinectJoint::ShoulderRight.index()].position = centre + Vec3::X * 0.18;
+        f.joints[KinectJoint::HandLeft.index()].position = centre + Vec3::new(-0.2, -0.7, 0.0);
+        f.joints[KinectJoint::HandRight.index()].position =
+            centre + Vec3::new(hand.x, hand.y, -hand.z);
+        f
+    }
+
+    #[test]
+    fn the_raised_hand_moves_the_cursor_like_a_mirror_and_grips_click() {
+        let mut c = CursorTracker::default();
+        let open = [HandState::Unknown, HandState::Open];
+        let closed = [HandState::Unknown, HandState::Closed];
+        // Hands down: no cursor.
+        assert!(
+            c.update(&frame(0.0, Vec3::new(0.2, -0.7, 0.0)), open)
+                .0
+                .is_none()
+        );
+        // Raised, to the person's right: the screen's right half.
+        let (cursor, click) = c.update(&frame(0.1, Vec3::new(0.4, -0.1, 0.4)), open);
+        let cursor = cursor.expect("raised");
+        assert_eq!(cursor.hand, HandSide::Right);
+        assert!(cursor.position.x > 0.6, "{cursor:?}");
+        assert!(click.is_none());
+        // Moved to the left and up, held there: the cursor follows, left of where it was.
+        let mut p = cursor.position;
+        for k in 0..30 {
+            let (cur, _) = c.update(
+                &frame(0.2 + k as f64 / 30.0, Vec3::new(-0.1, 0.05, 0.4)),
+                open,
+            );
+            p = cur.expect("raised").position;
+        }
+        assert!(
+            p.x < cursor.position.x - 0.2 && p.y < cursor.position.y,
+            "{p}"
+        );
+        // Grip, then open: a press then a release.
+        let t = 1.5;
+        assert_eq!(
+            c.update(&frame(t, Vec3::new(-0.1, 0.05, 0.4)), closed).1,
+            Some(Click::Press)
+        );
+        assert_eq!(
+            c.update(&frame(t + 0.03, Vec3::new(-0.1, 0.05, 0.4)), closed)
+                .1,
+            None
+        );
+        assert_eq!(
+            c.update(&frame(t + 0.06, Vec3::new(-0.1, 0.05, 0.4)), open)
+                .1,
+            Some(Click::Release)
+        );
+        // Pressed and the hand drops: released.
+        c.update(&frame(t + 0.1, Vec3::new(-0.1, 0.05, 0.4)), closed);
+        let (cur, click) = c.update(&frame(t + 0.13, Vec3::new(0.2, -0.7, 0.0)), closed);
+        assert!(cur.is_none());
+        assert_eq!(click, Some(Click::Release));
+    }
+}

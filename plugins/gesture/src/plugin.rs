@@ -1,0 +1,155 @@
+//! The gesture plugin: each new skeleton frame (from the tracker or a skeleton source) and
+//! the newest depth frame give both hands' states, the cursor and swipes; they come out as
+//! [`GestureEvent`] messages (for the kiosk's actions) and the [`Gestures`] resource (for the
+//! feedback on screen). Without depth the hands are unknown and swipes still work.
+
+use bevy::prelude::*;
+use fitroom_depth::plugin::DepthFeed;
+use fitroom_schedule::FitroomSystems;
+use fitroom_sensor::plugin::SensorFeed;
+use fitroom_sensor::{KinectJoint, SensorFrame};
+
+use crate::cursor::{Click, Cursor, CursorTracker};
+use crate::hand::classify::{HandLook, HandModel, look};
+use crate::hand::region::HandJoints;
+use crate::hand::state::HandFilter;
+use crate::swipe::{Swipe, SwipeDetector, SwipeDirection};
+use crate::{HandSide, HandState};
+
+/// A gesture the kiosk may act on.
+#[derive(Message, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GestureEvent {
+    Swipe(SwipeDirection),
+    /// The cursor's hand closed (a grip) / opened again.
+    Press,
+    Release,
+}
+
+/// What the hands are doing now (for feedback on screen).
+#[derive(Resource, Debug, Default, Clone)]
+pub struct Gestures {
+    /// [left, right].
+    pub hands: [HandState; 2],
+    pub p_open: [f32; 2],
+    pub cursor: Option<Cursor>,
+    pub last_swipe: Option<Swipe>,
+    /// Why hands are not read (the model file), if so.
+    pub error: Option<String>,
+}
+
+/// The detectors.
+#[derive(Resource)]
+struct GestureState {
+    model: Option<HandModel>,
+    filters: [HandFilter; 2],
+    swipes: SwipeDetector,
+    cursor: CursorTracker,
+    depth_frame: u64,
+}
+
+#[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
+pub struct GestureSystems;
+
+pub struct GesturePlugin;
+
+impl Plugin for GesturePlugin {
+    fn build(&self, app: &mut App) {
+        fitroom_schedule::ensure(app);
+        let (model, error) = match HandModel::embedded() {
+            Ok(m) => (Some(m), None),
+            Err(e) => (None, Some(e.to_string())),
+        };
+        app.add_message::<GestureEvent>()
+            .insert_resource(Gestures { error, ..default() })
+            .insert_resource(GestureState {
+                model,
+                filters: [HandFilter::default(); 2],
+                swipes: SwipeDetector::default(),
+                cursor: CursorTracker::default(),
+                depth_frame: 0,
+            })
+            .configure_sets(PostUpdate, GestureSystems.in_set(FitroomSystems::Gesture))
+            .add_systems(PostUpdate, read_gestures.in_set(GestureSystems));
+    }
+}
+
+/// The joints of `side`'s hand in `frame` for the hand-state classifier.
+pub fn hand_joints(frame: &SensorFrame, side: HandSide) -> HandJoints {
+    let (h, w, e) = match side {
+        HandSide::Left => (
+            KinectJoint::HandLeft,
+            KinectJoint::WristLeft,
+            KinectJoint::ElbowLeft,
+        ),
+        HandSide::Right => (
+            KinectJoint::HandRight,
+            KinectJoint::WristRight,
+            KinectJoint::ElbowRight,
+        ),
+    };
+    let at = |j: KinectJoint| {
+        let s = frame.joint(j);
+        if s.confidence > 0.0 {
+            s.position
+        } else {
+            Vec3::NAN
+        }
+    };
+    HandJoints {
+        hand: at(h),
+        wrist: at(w),
+        elbow: at(e),
+        head_neck_m: at(KinectJoint::Head).distance(at(KinectJoint::ShoulderCenter)),
+    }
+}
+
+fn read_gestures(
+    feed: Res<SensorFeed>,
+    depth: Option<Res<DepthFeed>>,
+    mut state: ResMut<GestureState>,
+    mut gestures: ResMut<Gestures>,
+    mut events: MessageWriter<GestureEvent>,
+) {
+    let state = &mut *state;
+    // The newest depth frame, once: the hands are read on the skeleton frame that came
+    // with it (the last new one).
+    let depth_frame = depth
+        .as_ref()
+        .filter(|d| d.frames_received != state.depth_frame)
+        .and_then(|d| d.latest.clone().map(|f| (d.frames_received, f)));
+    let last = feed.new_frames.len().saturating_sub(1);
+    for (k, frame) in feed.new_frames.iter().enumerate() {
+        if k == last {
+            for (i, side) in [HandSide::Left, HandSide::Right].into_iter().enumerate() {
+                let seen = match (&depth_frame, &state.model) {
+                    (Some((_, depth)), Some(model)) => {
+                        look(depth, &hand_joints(frame, side), model)
+                    }
+                    _ => HandLook::UNSEEN,
+                };
+                if depth_frame.is_some() || depth.is_none() {
+                    gestures.hands[i] = state.filters[i].update(&seen);
+                    gestures.p_open[i] = state.filters[i].p_open;
+                }
+            }
+        }
+        if let Some(swipe) = state.swipes.update(frame) {
+            gestures.last_swipe = Some(swipe);
+            events.write(GestureEvent::Swipe(swipe.direction));
+        }
+        let (cursor, click) = state.cursor.update(frame, gestures.hands);
+        gestures.cursor = cursor;
+        match click {
+            Some(Click::Press) => {
+                events.write(GestureEvent::Press);
+            }
+            Some(Click::Release) => {
+                events.write(GestureEvent::Release);
+            }
+            None => {}
+        }
+    }
+    if let Some((n, _)) = depth_frame {
+        state.depth_frame = n;
+    }
+}

@@ -1,0 +1,78 @@
+//! Swipes: recall on scripted swipes the thresholds were not set on (held-out seeds, other
+//! bodies), and false swipes on the 15 shared CMU clips, where nobody swipes.
+
+use std::path::Path;
+
+use fitroom_body::BodyModel;
+use fitroom_gesture::eval::TEST_SEEDS;
+use fitroom_gesture::eval::swipes::{false_swipes, swipe_recall};
+use fitroom_gesture::swipe::{SwipeDetector, SwipeSettings};
+use fitroom_sensor::{JointSample, KinectJoint, SensorFrame};
+use glam::{Quat, Vec3};
+
+fn model() -> BodyModel {
+    BodyModel::read(
+        &Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody"),
+    )
+    .expect("the shipped body")
+}
+
+/// At least 95 % of 150 scripted swipes found, each in its direction, none the other way.
+#[test]
+fn scripted_swipes_are_found_in_their_direction() {
+    let recall =
+        swipe_recall(&model(), SwipeSettings::default(), 150, TEST_SEEDS).expect("scripted");
+    println!(
+        "recall {:.3}, wrong way {}, extra {}",
+        recall.recall(),
+        recall.wrong_way,
+        recall.extra
+    );
+    assert!(recall.recall() >= 0.95, "{:?}", recall.missed);
+    assert_eq!(recall.wrong_way, 0);
+}
+
+/// The 15 CMU clips, 7 times each (their own noise each time, every second one mirrored):
+/// at most 2 swipes per 10 minutes.
+#[test]
+fn nobody_swipes_in_the_cmu_clips() {
+    let (mut seconds, mut swipes) = (0.0, 0);
+    for entry in fitroom_testdata::cmu_index() {
+        let clip = false_swipes(&entry.path(), SwipeSettings::default(), 7, 11).expect("the clip");
+        println!(
+            "{} {:.0} s: {} swipes",
+            clip.clip, clip.seconds, clip.swipes
+        );
+        seconds += clip.seconds;
+        swipes += clip.swipes;
+    }
+    let per_10_min = swipes as f64 / seconds * 600.0;
+    println!(
+        "{swipes} in {:.1} min: {per_10_min:.2} per 10 min",
+        seconds / 60.0
+    );
+    assert!(seconds > 600.0);
+    assert!(per_10_min <= 2.0, "{per_10_min}");
+}
+
+/// Missing shoulders, NaN hands and a frame back in time: no swipe, no panic.
+#[test]
+fn broken_skeletons_make_no_swipe() {
+    let mut d = SwipeDetector::default();
+    let mut frame = SensorFrame {
+        timestamp_s: 0.0,
+        sequence: 0,
+        joints: [JointSample {
+            position: Vec3::NAN,
+            orientation: Quat::IDENTITY,
+            confidence: 1.0,
+        }; KinectJoint::COUNT],
+    };
+    for k in 0..60 {
+        frame.timestamp_s = if k == 30 { -5.0 } else { k as f64 / 30.0 };
+        // The hands fly left and right through NaN shoulders.
+        frame.joints[KinectJoint::HandRight.index()].position =
+            Vec3::new((k as f32 * 0.7).sin(), 0.0, 2.0);
+        assert!(d.update(&frame).is_none());
+    }
+}
