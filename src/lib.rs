@@ -399,6 +399,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         Mode::Kiosk { .. } => {
             app.add_plugins((
                 kiosk::ui::OverlayPlugin,
+                kiosk::tryon_ui::TryOnScreenPlugin,
                 kiosk::guide::PoseGuidePlugin,
                 body_panel::BodyPanelPlugin,
             ));

@@ -4,14 +4,37 @@ use std::path::PathBuf;
 
 use anyhow::{Context, Result, bail};
 use clap::Subcommand;
+use fitroom_gesture::eval::swipes::{ClipFalseSwipes, SwipeRecall, false_swipes, swipe_recall};
 use fitroom_gesture::eval::{BandScore, Sample, Sampling, TEST_SEEDS, film_samples, pooled, score};
 use fitroom_gesture::hand::classify::{HandModel, train};
+use fitroom_gesture::swipe::SwipeSettings;
 use serde::Serialize;
 
 use super::{BodyArg, OutputArgs};
 
 #[derive(Subcommand)]
 pub enum GestureCommand {
+    /// Any depth recording (a fakenect dump) through the tracker and the hand reader: per
+    /// frame, each hand's pixel, depth and state (open, closed, unknown).
+    Run {
+        #[arg(long)]
+        dump: PathBuf,
+        #[command(flatten)]
+        body: BodyArg,
+        #[command(flatten)]
+        output: OutputArgs,
+    },
+    /// A picture of synthetic hands at 1-3.5 m, open and closed, with each method's call.
+    Sheet {
+        /// The PNG to write.
+        #[arg(long)]
+        out: PathBuf,
+        /// Which held-out poses.
+        #[arg(long, default_value_t = 0)]
+        seed: u64,
+        #[command(flatten)]
+        body: BodyArg,
+    },
     /// Train both hand-state methods (ours and the seed's threshold) on synthetic hands and
     /// write the model (the product's is assets/gesture/hands.ron).
     Train {
@@ -34,6 +57,15 @@ pub enum GestureCommand {
         model: Option<PathBuf>,
         #[arg(long)]
         train: bool,
+        /// Scripted swipes for the swipe recall (held-out seeds).
+        #[arg(long, default_value_t = 200)]
+        swipes: usize,
+        /// Motion clips where nobody swipes (BVH, .bvh.gz read as is), played
+        /// `--repeats` times each with their own noise (every second one mirrored).
+        #[arg(long, default_value = "data/mocap/cmu")]
+        clips: PathBuf,
+        #[arg(long, default_value_t = 7)]
+        repeats: usize,
         #[command(flatten)]
         body: BodyArg,
         #[command(flatten)]
@@ -84,6 +116,10 @@ pub struct HandReport {
     pub ours_1_to_2_5_m: f32,
     pub seed_1_to_2_5_m: f32,
     pub seed_threshold: f32,
+    pub swipe_recall: SwipeRecall,
+    pub false_swipes: Vec<ClipFalseSwipes>,
+    /// Swipes over the clips per 10 minutes (goal: at most 2).
+    pub false_swipes_per_10_min: f64,
 }
 
 fn film(body: &BodyArg, sampling: &Sampling, threads: usize, what: &str) -> Result<Vec<Sample>> {
@@ -117,6 +153,26 @@ fn trained(body: &BodyArg, args: &SamplingArgs) -> Result<HandModel> {
 
 pub fn run(command: GestureCommand) -> Result<()> {
     match command {
+        GestureCommand::Run { dump, body, output } => {
+            let report = super::gesture_run::gesture_run(&dump, &body)?;
+            output.print(&report, |r| {
+                println!("{}: {} frames", r.dump, r.frames.len());
+                for f in &r.frames {
+                    let hands: Vec<String> = f
+                        .hands
+                        .iter()
+                        .map(|h| format!("{:?} {:?} ({:.2})", h.hand, h.state, h.p_open))
+                        .collect();
+                    println!("{:>5} {:>7.3} s  {}", f.frame, f.time_s, hands.join(", "));
+                }
+            })
+        }
+        GestureCommand::Sheet { out, seed, body } => {
+            let model = HandModel::embedded()?;
+            super::gesture_sheet::hand_sheet(&body.load()?, &model, seed, &out)?;
+            println!("wrote {}", out.display());
+            Ok(())
+        }
         GestureCommand::Train {
             sampling,
             out,
@@ -133,9 +189,16 @@ pub fn run(command: GestureCommand) -> Result<()> {
             sampling,
             model,
             train,
+            swipes,
+            clips,
+            repeats,
             body,
             output,
         } => {
+            let clip_files = clip_files(&clips)?;
+            if repeats == 0 {
+                bail!("--repeats 0: at least 1");
+            }
             let hand_model = match (model, train) {
                 (Some(_), true) => bail!("--model and --train: give one"),
                 (Some(path), false) => {
@@ -150,6 +213,18 @@ pub fn run(command: GestureCommand) -> Result<()> {
             let samples = film(&body, &test, sampling.threads, "held-out hands")?;
             let bands = score(&hand_model, &samples, &[1.0, 1.5, 2.0, 2.5, 3.0, 3.5]);
             let (ours, seed) = pooled(&bands, 1.0, 2.5);
+            let settings = SwipeSettings::default();
+            let recall = swipe_recall(&body.load()?, settings, swipes, TEST_SEEDS)
+                .context("scripting swipes")?;
+            let mut per_clip = Vec::new();
+            for file in &clip_files {
+                per_clip.push(
+                    false_swipes(file, settings, repeats, 11)
+                        .with_context(|| format!("cannot play '{}'", file.display()))?,
+                );
+            }
+            let seconds: f64 = per_clip.iter().map(|c| c.seconds).sum();
+            let count: usize = per_clip.iter().map(|c| c.swipes).sum();
             let report = HandReport {
                 sampling: test,
                 model_trained_on: hand_model.trained_on.clone(),
@@ -157,6 +232,9 @@ pub fn run(command: GestureCommand) -> Result<()> {
                 ours_1_to_2_5_m: ours,
                 seed_1_to_2_5_m: seed,
                 seed_threshold: hand_model.seed_threshold,
+                swipe_recall: recall,
+                false_swipes: per_clip,
+                false_swipes_per_10_min: count as f64 / seconds.max(1e-9) * 600.0,
             };
             output.print(&report, |r| {
                 println!(
@@ -183,7 +261,46 @@ pub fn run(command: GestureCommand) -> Result<()> {
                     100.0 * r.ours_1_to_2_5_m,
                     100.0 * r.seed_1_to_2_5_m
                 );
+                println!(
+                    "swipes: {} of {} scripted found in their direction ({:.1} %; goal 95 %), \
+                     {} the wrong way",
+                    r.swipe_recall.found,
+                    r.swipe_recall.scripted,
+                    100.0 * r.swipe_recall.recall(),
+                    r.swipe_recall.wrong_way
+                );
+                let minutes: f64 = r.false_swipes.iter().map(|c| c.seconds).sum::<f64>() / 60.0;
+                println!(
+                    "false swipes: {:.2} per 10 min over {} clips, {minutes:.1} min (goal: at most 2)",
+                    r.false_swipes_per_10_min,
+                    r.false_swipes.len()
+                );
+                for c in r.false_swipes.iter().filter(|c| c.swipes > 0) {
+                    println!("  {}: {} in {:.0} s", c.clip, c.swipes, c.seconds);
+                }
             })
         }
     }
+}
+
+/// The BVH clips in `dir` (`.bvh`, `.bvh.gz`), sorted.
+fn clip_files(dir: &std::path::Path) -> Result<Vec<PathBuf>> {
+    let entries = std::fs::read_dir(dir).with_context(|| {
+        format!(
+            "cannot read the clips folder '{}' (give one with --clips DIR)",
+            dir.display()
+        )
+    })?;
+    let mut files: Vec<PathBuf> = entries
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| {
+            let name = p.to_string_lossy();
+            name.ends_with(".bvh") || name.ends_with(".bvh.gz")
+        })
+        .collect();
+    files.sort();
+    if files.is_empty() {
+        bail!("no .bvh or .bvh.gz clip in '{}'", dir.display());
+    }
+    Ok(files)
 }

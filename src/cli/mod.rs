@@ -14,6 +14,8 @@ pub mod app;
 pub mod body;
 pub mod cloth;
 pub mod gesture;
+pub mod gesture_run;
+pub mod gesture_sheet;
 pub mod import;
 pub mod measure;
 pub mod measure_dump;

@@ -5,8 +5,8 @@
 //! In `TryOn`: `Next` / `Previous` turn the carousel of the configuration's garments,
 //! `Select` dresses the avatar in the garment shown, `Back` returns the carousel to the one
 //! worn, `SizeUp` / `SizeDown` step through the garment's sizes, `ToggleFitMap` colours the
-//! garment by its strain, `Photo` saves a PNG of the screen. On entering `TryOn` the avatar
-//! wears the carousel's garment (the configuration's first) if it wears none.
+//! garment by its strain, `Photo` saves a PNG of the screen. In `TryOn` an avatar that wears
+//! nothing wears the carousel's garment (the configuration's first).
 
 use std::path::PathBuf;
 
@@ -66,7 +66,12 @@ pub struct TryOn {
 }
 
 pub fn add(app: &mut App) {
+    // The wheel's and the gestures' messages exist in every app (headless ones have no
+    // mouse, a kiosk without depth no gesture plugin): registering them here is a no-op
+    // where their plugins did, and their readers need them.
     app.add_message::<KioskAction>()
+        .add_message::<MouseWheel>()
+        .add_message::<GestureEvent>()
         .insert_resource(TryOn {
             photo_dir: PathBuf::from("photos"),
             ..default()
@@ -78,10 +83,16 @@ pub fn add(app: &mut App) {
                 wheel_actions,
                 touch_actions,
                 gesture_actions,
-            ),
+            )
+                .chain(),
         )
-        .add_systems(OnEnter(KioskState::TryOn), dress_on_entry)
-        .add_systems(PostUpdate, apply_actions.in_set(super::KioskSystems::Flow));
+        .add_systems(
+            PostUpdate,
+            (dress_in_try_on, apply_actions)
+                .chain()
+                .in_set(super::KioskSystems::Flow)
+                .after(super::kiosk_transitions),
+        );
 }
 
 fn keyboard_actions(keys: Option<Res<ButtonInput<KeyCode>>>, mut out: MessageWriter<KioskAction>) {
@@ -125,11 +136,7 @@ fn touch_actions(touches: Option<Res<Touches>>, mut out: MessageWriter<KioskActi
 
 /// A swipe to the person's right shows the next garment, to the left the previous; a grip
 /// selects.
-fn gesture_actions(
-    gestures: Option<MessageReader<GestureEvent>>,
-    mut out: MessageWriter<KioskAction>,
-) {
-    let Some(mut gestures) = gestures else { return };
+fn gesture_actions(mut gestures: MessageReader<GestureEvent>, mut out: MessageWriter<KioskAction>) {
     for g in gestures.read() {
         match g {
             GestureEvent::Swipe(SwipeDirection::Right) => {
@@ -156,12 +163,15 @@ fn garment_request(config: &ActiveKioskConfig, index: usize) -> Option<GarmentRe
     })
 }
 
-fn dress_on_entry(
+/// In `TryOn`, an avatar that wears nothing (and never did here) wears the carousel's
+/// garment.
+fn dress_in_try_on(
+    state: Res<State<KioskState>>,
     config: Res<ActiveKioskConfig>,
     mut tryon: ResMut<TryOn>,
     mut request: ResMut<GarmentRequest>,
 ) {
-    if request.path.is_some() {
+    if *state.get() != KioskState::TryOn || request.path.is_some() || tryon.worn.is_some() {
         return;
     }
     if let Some(r) = garment_request(&config, tryon.shown) {
@@ -256,7 +266,10 @@ fn status_size(status: &GarmentStatus) -> Option<String> {
 }
 
 /// The labels of the worn garment's sizes, smallest first (none before it is loaded).
-fn garment_sizes(status: &GarmentStatus, garments: &Assets<GarmentAsset>) -> Vec<String> {
+pub(super) fn garment_sizes(
+    status: &GarmentStatus,
+    garments: &Assets<GarmentAsset>,
+) -> Vec<String> {
     let Some(source) = status.asset.as_ref().and_then(|h| garments.get(h)) else {
         return Vec::new();
     };

@@ -228,7 +228,7 @@ fn track_person(time: Res<Time>, feed: Res<SensorFeed>, mut status: ResMut<Kiosk
     status.in_state_s += dt;
 }
 
-fn kiosk_transitions(
+pub(crate) fn kiosk_transitions(
     state: Res<State<KioskState>>,
     mut next: ResMut<NextState<KioskState>>,
     timings: Res<KioskTimings>,
@@ -320,4 +320,5 @@ pub mod config;
 pub mod depth_view;
 pub mod guide;
 pub mod measure;
+pub mod tryon_ui;
 pub mod ui;

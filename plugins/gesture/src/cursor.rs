@@ -100,17 +100,23 @@ impl CursorTracker {
                 best = Some((side, sample.position, reach));
             }
         }
-        let Some((side, hand, _)) = best else {
+        let box_of = |side: HandSide, hand: Vec3| {
+            let out = match side {
+                HandSide::Left => -1.0,
+                HandSide::Right => 1.0,
+            };
+            let d = (hand - centre) / width;
+            Vec2::new(
+                (d.dot(right) - out * s.centre_out) / s.half_width,
+                (d.y - s.centre_up) / s.half_height,
+            )
+        };
+        // A hand below the box is not raised (an arm swinging forwards in a walk).
+        let Some((side, hand, _)) = best.filter(|b| box_of(b.0, b.1).y >= -1.0) else {
             self.smoothed = None;
             return (None, self.release());
         };
-        let out = match side {
-            HandSide::Left => -1.0,
-            HandSide::Right => 1.0,
-        };
-        let d = (hand - centre) / width;
-        let x = (d.dot(right) - out * s.centre_out) / s.half_width;
-        let y = (d.y - s.centre_up) / s.half_height;
+        let Vec2 { x, y } = box_of(side, hand);
         let raw = Vec2::new(0.5 + 0.5 * x, 0.5 - 0.5 * y).clamp(Vec2::ZERO, Vec2::ONE);
         let t = frame.timestamp_s;
         let position = match self.smoothed {

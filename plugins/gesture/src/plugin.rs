@@ -7,7 +7,6 @@ use bevy::prelude::*;
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_schedule::FitroomSystems;
 use fitroom_sensor::plugin::SensorFeed;
-use fitroom_sensor::{KinectJoint, SensorFrame};
 
 use crate::cursor::{Click, Cursor, CursorTracker};
 use crate::hand::classify::{HandLook, HandModel, look};
@@ -73,36 +72,6 @@ impl Plugin for GesturePlugin {
     }
 }
 
-/// The joints of `side`'s hand in `frame` for the hand-state classifier.
-pub fn hand_joints(frame: &SensorFrame, side: HandSide) -> HandJoints {
-    let (h, w, e) = match side {
-        HandSide::Left => (
-            KinectJoint::HandLeft,
-            KinectJoint::WristLeft,
-            KinectJoint::ElbowLeft,
-        ),
-        HandSide::Right => (
-            KinectJoint::HandRight,
-            KinectJoint::WristRight,
-            KinectJoint::ElbowRight,
-        ),
-    };
-    let at = |j: KinectJoint| {
-        let s = frame.joint(j);
-        if s.confidence > 0.0 {
-            s.position
-        } else {
-            Vec3::NAN
-        }
-    };
-    HandJoints {
-        hand: at(h),
-        wrist: at(w),
-        elbow: at(e),
-        head_neck_m: at(KinectJoint::Head).distance(at(KinectJoint::ShoulderCenter)),
-    }
-}
-
 fn read_gestures(
     feed: Res<SensorFeed>,
     depth: Option<Res<DepthFeed>>,
@@ -123,7 +92,7 @@ fn read_gestures(
             for (i, side) in [HandSide::Left, HandSide::Right].into_iter().enumerate() {
                 let seen = match (&depth_frame, &state.model) {
                     (Some((_, depth)), Some(model)) => {
-                        look(depth, &hand_joints(frame, side), model)
+                        look(depth, &HandJoints::of_frame(frame, side), model)
                     }
                     _ => HandLook::UNSEEN,
                 };

@@ -23,6 +23,38 @@ pub struct HandJoints {
 }
 
 impl HandJoints {
+    /// The joints of `side`'s hand in a skeleton frame (a joint not tracked is NaN: the
+    /// hand is then unknown).
+    pub fn of_frame(frame: &fitroom_sensor::SensorFrame, side: crate::HandSide) -> Self {
+        use fitroom_sensor::KinectJoint;
+        let (h, w, e) = match side {
+            crate::HandSide::Left => (
+                KinectJoint::HandLeft,
+                KinectJoint::WristLeft,
+                KinectJoint::ElbowLeft,
+            ),
+            crate::HandSide::Right => (
+                KinectJoint::HandRight,
+                KinectJoint::WristRight,
+                KinectJoint::ElbowRight,
+            ),
+        };
+        let at = |j: KinectJoint| {
+            let s = frame.joint(j);
+            if s.confidence > 0.0 {
+                s.position
+            } else {
+                Vec3::NAN
+            }
+        };
+        Self {
+            hand: at(h),
+            wrist: at(w),
+            elbow: at(e),
+            head_neck_m: at(KinectJoint::Head).distance(at(KinectJoint::ShoulderCenter)),
+        }
+    }
+
     /// The hand's length (wrist to fingertip) expected for this body: 0.18 m for a head-neck
     /// distance of 0.20 m (MakeHuman's default body; the Kinect head joint is the head's
     /// centre, the shoulder centre the neck's base), in proportion.

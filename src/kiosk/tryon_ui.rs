@@ -1,0 +1,237 @@
+//! The try-on screen (egui, large enough to read from 2.5 m): the carousel of the
+//! configuration's garments, the sizes with the recommended one marked and why, fit map and
+//! photo; how to start in `Attract`; and feedback for every gesture (the hand cursor, its
+//! grip, a swipe's arrow). Its buttons produce [`KioskAction`]s like every other input.
+
+use bevy::prelude::*;
+use bevy_egui::{EguiContexts, EguiPrimaryContextPass, egui};
+use fitroom_garment::asset::GarmentAsset;
+use fitroom_garment::plugin::{ClothSettings, GarmentRequest, GarmentStatus};
+use fitroom_gesture::plugin::Gestures;
+use fitroom_gesture::swipe::SwipeDirection;
+use fitroom_sensor::plugin::SensorFeed;
+
+use super::KioskState;
+use super::actions::{KioskAction, TryOn, garment_sizes};
+use super::config::ActiveKioskConfig;
+use super::measure::SizeAdvice;
+
+pub struct TryOnScreenPlugin;
+
+impl Plugin for TryOnScreenPlugin {
+    fn build(&self, app: &mut App) {
+        app.add_systems(EguiPrimaryContextPass, (try_on_screen, gesture_feedback));
+    }
+}
+
+/// Text sizes for reading at 2.5 m on a 1280x800 mirror.
+const BIG: f32 = 30.0;
+const MEDIUM: f32 = 22.0;
+
+const ACCENT: egui::Color32 = egui::Color32::from_rgb(240, 190, 90);
+
+/// A garment's name on screen: its file's stem, words capitalised.
+fn garment_name(file: &str) -> String {
+    let stem = std::path::Path::new(file)
+        .file_stem()
+        .map_or_else(|| file.to_string(), |s| s.to_string_lossy().into_owned());
+    stem.split(['_', '-'])
+        .map(|w| {
+            let mut c = w.chars();
+            c.next().map_or_else(String::new, |f| {
+                f.to_uppercase().collect::<String>() + c.as_str()
+            })
+        })
+        .collect::<Vec<_>>()
+        .join(" ")
+}
+
+// A Bevy system: each parameter is a resource the screen shows.
+#[allow(clippy::too_many_arguments)]
+fn try_on_screen(
+    mut contexts: EguiContexts,
+    state: Res<State<KioskState>>,
+    config: Res<ActiveKioskConfig>,
+    mut tryon: ResMut<TryOn>,
+    request: Res<GarmentRequest>,
+    status: Res<GarmentStatus>,
+    garments: Res<Assets<GarmentAsset>>,
+    advice: Res<SizeAdvice>,
+    cloth: Res<ClothSettings>,
+    mut actions: MessageWriter<KioskAction>,
+) -> Result {
+    let ctx = contexts.ctx_mut()?;
+    match state.get() {
+        KioskState::Attract => {
+            egui::Area::new(egui::Id::new("attract"))
+                .anchor(egui::Align2::CENTER_BOTTOM, egui::vec2(0.0, -60.0))
+                .show(ctx, |ui| {
+                    egui::Frame::popup(ui.style()).show(ui, |ui| {
+                        ui.vertical_centered(|ui| {
+                            ui.label(egui::RichText::new("Step in front of the mirror").size(BIG));
+                            ui.label(
+                                egui::RichText::new(
+                                    "then raise a hand: swipe to browse, close it to choose",
+                                )
+                                .size(MEDIUM),
+                            );
+                        });
+                    });
+                });
+        }
+        KioskState::Calibrate => {}
+        KioskState::TryOn => {
+            let entries = &config.config.garments;
+            egui::Area::new(egui::Id::new("try-on"))
+                .anchor(egui::Align2::CENTER_BOTTOM, egui::vec2(0.0, -24.0))
+                .show(ctx, |ui| {
+                    egui::Frame::popup(ui.style()).show(ui, |ui| {
+                        ui.set_max_width(1100.0);
+                        // The carousel.
+                        ui.horizontal(|ui| {
+                            if ui.button(egui::RichText::new("◀").size(BIG)).clicked() {
+                                actions.write(KioskAction::Previous);
+                            }
+                            for (i, entry) in entries.iter().enumerate() {
+                                let mut text = egui::RichText::new(garment_name(&entry.file))
+                                    .size(if i == tryon.shown { BIG } else { MEDIUM });
+                                if tryon.worn == Some(i) {
+                                    text = text.color(ACCENT);
+                                }
+                                let button = egui::Button::new(text).selected(i == tryon.shown);
+                                if ui.add(button).clicked() {
+                                    tryon.shown = i;
+                                    actions.write(KioskAction::Select);
+                                }
+                            }
+                            if ui.button(egui::RichText::new("▶").size(BIG)).clicked() {
+                                actions.write(KioskAction::Next);
+                            }
+                        });
+                        // The sizes of the garment worn, the recommended one marked.
+                        let sizes = garment_sizes(&status, &garments);
+                        if !sizes.is_empty() {
+                            ui.horizontal(|ui| {
+                                ui.label(egui::RichText::new("Size").size(MEDIUM));
+                                let worn = request.size.clone().or_else(|| {
+                                    status
+                                        .worn
+                                        .as_ref()
+                                        .and_then(|w| w.rsplit(' ').next().map(str::to_owned))
+                                });
+                                for size in &sizes {
+                                    let recommended = advice.size.as_ref() == Some(size);
+                                    let label = if recommended {
+                                        format!("{size} ★")
+                                    } else {
+                                        size.clone()
+                                    };
+                                    let mut text = egui::RichText::new(label).size(MEDIUM);
+                                    if recommended {
+                                        text = text.color(ACCENT);
+                                    }
+                                    let selected = worn.as_ref() == Some(size);
+                                    if ui.add(egui::Button::new(text).selected(selected)).clicked()
+                                    {
+                                        let at = sizes.iter().position(|s| s == size);
+                                        let now = worn
+                                            .as_ref()
+                                            .and_then(|w| sizes.iter().position(|s| s == w));
+                                        if let (Some(at), Some(now)) = (at, now) {
+                                            let step = if at > now {
+                                                KioskAction::SizeUp
+                                            } else {
+                                                KioskAction::SizeDown
+                                            };
+                                            for _ in 0..at.abs_diff(now) {
+                                                actions.write(step);
+                                            }
+                                        }
+                                    }
+                                }
+                                ui.separator();
+                                let fit = if cloth.fit_map {
+                                    "Fit map: on"
+                                } else {
+                                    "Fit map"
+                                };
+                                if ui.button(egui::RichText::new(fit).size(MEDIUM)).clicked() {
+                                    actions.write(KioskAction::ToggleFitMap);
+                                }
+                                if ui
+                                    .button(egui::RichText::new("Photo").size(MEDIUM))
+                                    .clicked()
+                                {
+                                    actions.write(KioskAction::Photo);
+                                }
+                            });
+                        }
+                        if advice.size.is_some() && !advice.reason.is_empty() {
+                            ui.label(
+                                egui::RichText::new(format!("★ your size: {}", advice.reason))
+                                    .size(16.0),
+                            );
+                        }
+                        if let Some(photo) = &tryon.photo {
+                            ui.label(egui::RichText::new(photo).size(16.0));
+                        }
+                        ui.label(
+                            egui::RichText::new(
+                                "swipe right / left: next / previous  ·  close your hand: wear it",
+                            )
+                            .size(16.0)
+                            .weak(),
+                        );
+                    });
+                });
+        }
+    }
+    Ok(())
+}
+
+/// The hand cursor (a ring, filled as the hand grips) and, for half a second after a swipe,
+/// its arrow.
+fn gesture_feedback(
+    mut contexts: EguiContexts,
+    gestures: Option<Res<Gestures>>,
+    feed: Res<SensorFeed>,
+) -> Result {
+    let Some(gestures) = gestures else {
+        return Ok(());
+    };
+    let ctx = contexts.ctx_mut()?;
+    let screen = ctx.content_rect();
+    let painter = ctx.layer_painter(egui::LayerId::new(
+        egui::Order::Foreground,
+        egui::Id::new("gesture-feedback"),
+    ));
+    if let Some(cursor) = gestures.cursor {
+        let at = screen.min
+            + egui::vec2(
+                cursor.position.x * screen.width(),
+                cursor.position.y * screen.height(),
+            );
+        let colour = egui::Color32::from_rgba_unmultiplied(240, 190, 90, 220);
+        painter.circle_stroke(at, 28.0, egui::Stroke::new(5.0, colour));
+        if cursor.pressed {
+            painter.circle_filled(at, 22.0, colour);
+        }
+    }
+    let now = feed.latest.as_ref().map(|f| f.timestamp_s);
+    if let (Some(swipe), Some(now)) = (gestures.last_swipe, now)
+        && (0.0..0.6).contains(&(now - swipe.time_s))
+    {
+        let arrow = match swipe.direction {
+            SwipeDirection::Right => "▶▶",
+            SwipeDirection::Left => "◀◀",
+        };
+        painter.text(
+            screen.center(),
+            egui::Align2::CENTER_CENTER,
+            arrow,
+            egui::FontId::proportional(96.0),
+            egui::Color32::from_rgba_unmultiplied(240, 190, 90, 200),
+        );
+    }
+    Ok(())
+}
