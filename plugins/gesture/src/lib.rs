@@ -19,6 +19,17 @@ pub enum HandSide {
     Right,
 }
 
+impl HandSide {
+    /// This side's hand, wrist and elbow Kinect joints.
+    pub fn arm_joints(self) -> [fitroom_sensor::KinectJoint; 3] {
+        use fitroom_sensor::KinectJoint::*;
+        match self {
+            HandSide::Left => [HandLeft, WristLeft, ElbowLeft],
+            HandSide::Right => [HandRight, WristRight, ElbowRight],
+        }
+    }
+}
+
 /// What a hand is doing.
 #[derive(
     Clone, Copy, Debug, Default, PartialEq, Eq, Hash, serde::Serialize, serde::Deserialize,

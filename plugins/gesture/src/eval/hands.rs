@@ -61,18 +61,7 @@ pub fn hand_joints(
     error_m: f32,
     state: &mut u64,
 ) -> HandJoints {
-    let (h, w, e) = match side {
-        HandSide::Left => (
-            KinectJoint::HandLeft,
-            KinectJoint::WristLeft,
-            KinectJoint::ElbowLeft,
-        ),
-        HandSide::Right => (
-            KinectJoint::HandRight,
-            KinectJoint::WristRight,
-            KinectJoint::ElbowRight,
-        ),
-    };
+    let [h, w, e] = side.arm_joints();
     let mut gauss = || {
         // Box-Muller.
         let (a, b) = (next_unit(state).max(1e-7), next_unit(state));

@@ -190,7 +190,7 @@ pub fn train(examples: &[Example], trained_on: String) -> HandModel {
     let ridge = 1e-2 * f64::from(n);
     for _ in 0..25 {
         let mut grad = [0.0f64; D];
-        let mut hess = [[0.0f64; D]; D];
+        let mut hess = vec![0.0f64; D * D];
         for (x, open) in &rows {
             let z = z_of(x);
             let s: f64 = z.iter().zip(&beta).map(|(a, b)| a * b).sum();
@@ -200,15 +200,17 @@ pub fn train(examples: &[Example], trained_on: String) -> HandModel {
             for i in 0..D {
                 grad[i] += (y - p) * z[i];
                 for j in 0..D {
-                    hess[i][j] += w * z[i] * z[j];
+                    hess[i * D + j] += w * z[i] * z[j];
                 }
             }
         }
         for i in 1..D {
             grad[i] -= ridge * beta[i];
-            hess[i][i] += ridge;
+            hess[i * D + i] += ridge;
         }
-        let Some(step) = solve(hess, grad) else {
+        // The ridge-penalised Hessian is positive definite.
+        let Some(step) = fitroom_math::linear::Cholesky::new(&hess, D).map(|c| c.solve(&grad))
+        else {
             break;
         };
         let mut size = 0.0;
@@ -249,31 +251,6 @@ fn best_threshold(examples: &[Example]) -> f32 {
         }
     }
     at
-}
-
-/// Solves `a x = b` (Gaussian elimination with partial pivoting); `None` if singular.
-fn solve<const D: usize>(mut a: [[f64; D]; D], mut b: [f64; D]) -> Option<[f64; D]> {
-    for c in 0..D {
-        let p = (c..D).max_by(|&i, &j| a[i][c].abs().total_cmp(&a[j][c].abs()))?;
-        if a[p][c].abs() < 1e-12 {
-            return None;
-        }
-        a.swap(c, p);
-        b.swap(c, p);
-        for r in c + 1..D {
-            let f = a[r][c] / a[c][c];
-            for k in c..D {
-                a[r][k] -= f * a[c][k];
-            }
-            b[r] -= f * b[c];
-        }
-    }
-    let mut x = [0.0; D];
-    for r in (0..D).rev() {
-        let s: f64 = (r + 1..D).map(|k| a[r][k] * x[k]).sum();
-        x[r] = (b[r] - s) / a[r][r];
-    }
-    Some(x)
 }
 
 #[cfg(test)]

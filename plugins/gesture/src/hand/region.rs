@@ -27,18 +27,7 @@ impl HandJoints {
     /// hand is then unknown).
     pub fn of_frame(frame: &fitroom_sensor::SensorFrame, side: crate::HandSide) -> Self {
         use fitroom_sensor::KinectJoint;
-        let (h, w, e) = match side {
-            crate::HandSide::Left => (
-                KinectJoint::HandLeft,
-                KinectJoint::WristLeft,
-                KinectJoint::ElbowLeft,
-            ),
-            crate::HandSide::Right => (
-                KinectJoint::HandRight,
-                KinectJoint::WristRight,
-                KinectJoint::ElbowRight,
-            ),
-        };
+        let [h, w, e] = side.arm_joints();
         let at = |j: KinectJoint| {
             let s = frame.joint(j);
             if s.confidence > 0.0 {
