@@ -17,7 +17,7 @@ pub mod timing;
 
 use std::{path::PathBuf, sync::Arc, time::Duration};
 
-use anyhow::{Context, Result};
+use anyhow::{Context, Result, bail};
 use bevy::{
     app::ScheduleRunnerPlugin,
     prelude::*,
@@ -31,6 +31,7 @@ use fitroom_body::{
     plugin::{AvatarBody, AvatarShape, BodyPlugin, SensorPlacement},
 };
 use fitroom_garment::plugin::{ClothSettings, GarmentPlugin, GarmentRequest};
+use fitroom_gesture::script::{GestureScript, ScriptedPerson};
 use fitroom_motion::{
     AvatarPipeline, MotionPipeline,
     plugin::{AvatarMotion, FilterSettings, MotionPlugin},
@@ -138,6 +139,13 @@ impl AppOptions {
     }
 }
 
+/// Whether `motion` names a gesture script (a `.ron` file) rather than a clip.
+pub fn is_gesture_script(motion: &std::path::Path) -> bool {
+    motion
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("ron"))
+}
+
 /// The background colour of the room (used by the screenshot test to find the avatar).
 pub const BACKGROUND: Color = Color::srgb(0.10, 0.11, 0.14);
 
@@ -151,15 +159,36 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         )
     })?;
     let body_load_ms = load_start.elapsed().as_secs_f64() * 1e3;
-    let clip = BvhClip::load(&options.motion)
-        .with_context(|| format!("cannot load the motion '{}'", options.motion.display()))?;
     let source_options = BvhSourceOptions {
         start_distance_m: options.distance_m,
         treadmill: options.treadmill,
         ..BvhSourceOptions::default()
     };
-    let source = BvhSource::from_clip(clip, source_options)
-        .with_context(|| format!("cannot replay '{}'", options.motion.display()))?;
+    // A gesture script (`.ron`) is performed by the `performer` sensor; a clip is replayed.
+    let script = if is_gesture_script(&options.motion) {
+        if !matches!(options.sensor, sensors::SensorSpec::Performer(_)) {
+            bail!(
+                "'{}' is a gesture script: only the performer performs one (`--sensor performer:{}`); `bvh:` and `synthetic` replay a .bvh clip",
+                options.motion.display(),
+                options.motion.display()
+            );
+        }
+        Some(GestureScript::load(&options.motion)?)
+    } else {
+        None
+    };
+    let source = match script {
+        Some(_) => None,
+        None => {
+            let clip = BvhClip::load(&options.motion).with_context(|| {
+                format!("cannot load the motion '{}'", options.motion.display())
+            })?;
+            Some(
+                BvhSource::from_clip(clip, source_options)
+                    .with_context(|| format!("cannot replay '{}'", options.motion.display()))?,
+            )
+        }
+    };
     let model = Arc::new(model);
     let shape = options.shape.clone().unwrap_or_default();
     let body = match &options.shape {
@@ -172,30 +201,30 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         None => AvatarBody::unshaped(model.clone()),
     };
     let skeleton = fitroom_motion::avatar_skeleton(&model, &body.rest)?;
-    let floor_y = -source.options().sensor_height_m;
+    let sensor_height_m = source.as_ref().map_or(source_options.sensor_height_m, |s| {
+        s.options().sensor_height_m
+    });
+    let floor_y = -sensor_height_m;
     let motion = AvatarMotion::new(MotionPipeline::new(
         AvatarPipeline::new(&skeleton, floor_y)?,
         FilterSettings::default().filter.build(),
     ));
 
-    let source_height = source.options().sensor_height_m;
-    let placement = SensorPlacement {
-        sensor_height_m: source_height,
-    };
-    let source: Box<dyn SensorSource> = match options.noise_seed {
+    let placement = SensorPlacement { sensor_height_m };
+    let source: Option<Box<dyn SensorSource>> = source.map(|source| match options.noise_seed {
         Some(seed) => Box::new(NoisySource::new(
             source,
             &fitroom_motion::eval::evaluation_noise(),
             seed,
-        )),
+        )) as Box<dyn SensorSource>,
         None => Box::new(source),
-    };
+    });
     // A depth-only source (a recording, a Kinect) has no skeleton of its own: the tracker
     // finds it in the depth (`SkeletonFromDepth` below).
     let (skeleton_source, performer_clip, sensor_name) = match &options.sensor {
-        sensors::SensorSpec::Bvh(_) => (Some(source), None, String::new()),
+        sensors::SensorSpec::Bvh(_) => (source, None, String::new()),
         sensors::SensorSpec::Synthetic => (
-            Some(source),
+            source,
             None,
             format!(
                 "synthetic (ground-truth skeleton of {}{})",
@@ -208,9 +237,9 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             ),
         ),
         // The performer takes the clip: the camera films it, the avatar follows the tracker.
-        sensors::SensorSpec::Performer => (
+        sensors::SensorSpec::Performer(_) => (
             None,
-            Some(source),
+            source,
             format!(
                 "performer (the synthetic Kinect filming {}; skeleton: the tracker)",
                 options.motion.display()
@@ -222,19 +251,33 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             format!("{} (skeleton: the tracker)", other.name()),
         ),
     };
-    let depth = match performer_clip {
-        Some(clip) => Some(sensors::ActiveDepth::performer(
+    let performer = match (performer_clip, &script) {
+        (Some(clip), _) => Some(performer::Performer::clip(
+            clip,
+            MotionPipeline::new(
+                AvatarPipeline::new(&skeleton, floor_y)?,
+                FilterSettings::default().filter.build(),
+            ),
+            body.clone(),
+        )),
+        (None, Some(script)) => Some(performer::Performer::script(
+            ScriptedPerson::new(
+                model.clone(),
+                body.positions.clone(),
+                body.rest.clone(),
+                script,
+                floor_y,
+            )
+            .with_context(|| format!("cannot perform '{}'", options.motion.display()))?,
+        )),
+        (None, None) => None,
+    };
+    let depth = match performer {
+        Some(performer) => Some(sensors::ActiveDepth::performer(
             &placement,
             options.depth_seed,
             (&body, options.extras),
-            performer::Performer::new(
-                clip,
-                MotionPipeline::new(
-                    AvatarPipeline::new(&skeleton, floor_y)?,
-                    FilterSettings::default().filter.build(),
-                ),
-                body.clone(),
-            ),
+            performer,
         )),
         None => sensors::ActiveDepth::open(
             &options.sensor,

@@ -5,9 +5,10 @@
 //! - `synthetic`: the clip drives the avatar, and the synthetic Kinect v1 sees the avatar
 //!   and its garment in a room; the clip's skeleton is passed on, labelled ground truth,
 //!   until the tracker exists.
-//! - `performer`: the clip drives a performer the synthetic Kinect v1 films in a room
-//!   ([`crate::performer`]); the tracker finds the skeleton in that depth and drives the
-//!   avatar: the whole chain of a camera kiosk, without a camera.
+//! - `performer` or `performer:FILE`: the clip (FILE: a `.bvh` clip, or a `.ron` gesture
+//!   script in which the person turns, swipes and grips) drives a performer the synthetic
+//!   Kinect v1 films in a room ([`crate::performer`]); the tracker finds the skeleton in that
+//!   depth and drives the avatar: the whole chain of a camera kiosk, without a camera.
 //! - `fakenect:DIR`: a fakenect recording played in pure Rust at its pace, looping; its
 //!   ground-truth skeleton drives the avatar when the recording has one.
 //! - `kinect`: a Kinect v1 through libfreenect (`LD_LIBRARY_PATH` naming Debian's fakenect
@@ -39,13 +40,14 @@ use crate::performer::Performer;
 pub enum SensorSpec {
     Bvh(PathBuf),
     Synthetic,
-    Performer,
+    /// The clip or gesture script the performer plays (`None`: the configuration's clip).
+    Performer(Option<PathBuf>),
     Fakenect(PathBuf),
     Kinect,
 }
 
 /// The forms a sensor is given in, for error messages.
-pub const SENSOR_FORMS: &str = "`bvh:FILE` (a recorded clip), `synthetic` (the synthetic Kinect v1 seeing the avatar), `performer` (the synthetic Kinect v1 filming the clip's performer, the tracker driving the avatar), `fakenect:DIR` (a depth recording) or `kinect` (a Kinect v1 through libfreenect)";
+pub const SENSOR_FORMS: &str = "`bvh:FILE` (a recorded clip), `synthetic` (the synthetic Kinect v1 seeing the avatar), `performer` or `performer:FILE` (the synthetic Kinect v1 filming a performer playing the clip, or FILE: a clip or a gesture script, the tracker driving the avatar), `fakenect:DIR` (a depth recording) or `kinect` (a Kinect v1 through libfreenect)";
 
 impl FromStr for SensorSpec {
     type Err = anyhow::Error;
@@ -60,9 +62,12 @@ impl FromStr for SensorSpec {
         };
         Ok(match s {
             "synthetic" => Self::Synthetic,
-            "performer" => Self::Performer,
+            "performer" => Self::Performer(None),
             "kinect" => Self::Kinect,
             _ if s.starts_with("bvh:") => Self::Bvh(non_empty(&s[4..], "clip")?),
+            _ if s.starts_with("performer:") => {
+                Self::Performer(Some(non_empty(&s[10..], "clip or gesture script")?))
+            }
             _ if s.starts_with("fakenect:") => Self::Fakenect(non_empty(&s[9..], "folder")?),
             _ => bail!("\"{s}\" is not a sensor; sensors are {SENSOR_FORMS}"),
         })
@@ -70,11 +75,12 @@ impl FromStr for SensorSpec {
 }
 
 impl SensorSpec {
-    /// A `bvh:` sensor replaying `clip` (the path the app resolved); other sensors as they
-    /// are.
+    /// A `bvh:` or `performer:` sensor playing `clip` (the path the app resolved); other
+    /// sensors as they are.
     pub fn with_clip(self, clip: &std::path::Path) -> Self {
         match self {
             Self::Bvh(_) => Self::Bvh(clip.to_owned()),
+            Self::Performer(Some(_)) => Self::Performer(Some(clip.to_owned())),
             other => other,
         }
     }
@@ -84,7 +90,8 @@ impl SensorSpec {
         match self {
             Self::Bvh(path) => format!("bvh:{}", path.display()),
             Self::Synthetic => "synthetic".into(),
-            Self::Performer => "performer".into(),
+            Self::Performer(None) => "performer".into(),
+            Self::Performer(Some(path)) => format!("performer:{}", path.display()),
             Self::Fakenect(dir) => format!("fakenect:{}", dir.display()),
             Self::Kinect => "kinect".into(),
         }
@@ -164,7 +171,7 @@ impl ActiveDepth {
         let camera = DepthCamera::default();
         Ok(match spec {
             // The performer needs the clip and its pipeline: [`Self::performer`].
-            SensorSpec::Bvh(_) | SensorSpec::Performer => None,
+            SensorSpec::Bvh(_) | SensorSpec::Performer(_) => None,
             SensorSpec::Synthetic => {
                 let room = depth_scene::room_with(placement, scene.0, scene.1);
                 Some(Self::Synthetic {
@@ -346,7 +353,17 @@ mod tests {
             " synthetic ".parse::<SensorSpec>().expect("valid"),
             SensorSpec::Synthetic
         );
-        for bad in ["fakenect:", "bvh:", "kinekt", ""] {
+        assert_eq!(
+            "performer".parse::<SensorSpec>().expect("valid"),
+            SensorSpec::Performer(None)
+        );
+        assert_eq!(
+            "performer:motions/gestures.ron"
+                .parse::<SensorSpec>()
+                .expect("valid"),
+            SensorSpec::Performer(Some("motions/gestures.ron".into()))
+        );
+        for bad in ["fakenect:", "bvh:", "performer:", "kinekt", ""] {
             let message = bad.parse::<SensorSpec>().expect_err(bad).to_string();
             assert!(message.contains("fakenect:DIR"), "{message}");
         }

@@ -118,7 +118,10 @@ fn avatar_root_travels_the_clips_path() {
 fn avatar_root_travels_the_clips_path_through_depth_and_the_tracker() {
     let mut options = AppOptions::with_defaults(Mode::Headless { render: false })
         .expect("the shipped assets read");
-    assert_eq!(options.sensor, fitroom::sensors::SensorSpec::Performer);
+    assert_eq!(
+        options.sensor,
+        fitroom::sensors::SensorSpec::Performer(None)
+    );
     options.treadmill = false;
     options.distance_m = 3.3;
     let report = assert_root_path(&options, 72, 1.0);

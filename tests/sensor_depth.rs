@@ -366,7 +366,7 @@ fn the_tracker_drives_the_avatar_from_the_performer_the_camera_films() {
     // the avatar's only skeleton is the tracker's.
     let mut options =
         AppOptions::with_defaults(Mode::Headless { render: false }).expect("defaults");
-    options.sensor = SensorSpec::Performer;
+    options.sensor = SensorSpec::Performer(None);
     options.motion = fitroom_testdata::clip_path("141_16.bvh");
     let mut app = headless::headless_app(&options).expect("the app builds");
     for _ in 0..60 {

@@ -218,9 +218,13 @@ impl KioskConfig {
         self.sensor.parse()
     }
 
-    /// The clip of a `bvh:FILE` sensor.
+    /// The clip of a `bvh:FILE` or `performer:FILE` sensor.
     pub fn sensor_clip(&self) -> Option<&str> {
-        self.sensor.strip_prefix("bvh:").filter(|f| !f.is_empty())
+        let s = self.sensor.trim();
+        s.strip_prefix("bvh:")
+            .or_else(|| s.strip_prefix("performer:"))
+            .map(str::trim)
+            .filter(|f| !f.is_empty())
     }
 
     /// The timings as the kiosk's resource.
@@ -328,7 +332,7 @@ mod tests {
         // embedded clip's performer on a treadmill, the tracker drives the avatar.
         assert_eq!(
             config.sensor_spec().expect("a sensor"),
-            crate::sensors::SensorSpec::Performer
+            crate::sensors::SensorSpec::Performer(None)
         );
         assert_eq!(config.sensor_clip(), None);
         assert!(config.treadmill);

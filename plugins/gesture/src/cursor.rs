@@ -2,7 +2,9 @@
 //! (beside the shoulder of that hand, sized by the shoulder width, so a short and a tall
 //! person reach the screen's corners alike), smoothed (the One Euro filter's idea: smooth
 //! when still, quick when moving), mirrored like the mirror (the person's right is the
-//! screen's right); a grip presses, opening releases.
+//! screen's right); a grip presses, opening releases. A grip presses only a hand that was
+//! seen open and held still since it was raised, and is still now: a hand read closed while
+//! it rises or drops past the body (where its region is the arm's) clicks nothing.
 
 use fitroom_motion::filter::one_euro::smoothing_factor;
 use fitroom_sensor::{KinectJoint, SensorFrame};
@@ -25,6 +27,10 @@ pub struct CursorSettings {
     /// Cutoff at rest and its growth with speed (screen widths per second), Hz.
     pub min_cutoff_hz: f32,
     pub beta: f32,
+    /// A hand moving slower than this (box widths per second, over [`Self::still_window_s`])
+    /// is still.
+    pub max_still_speed: f32,
+    pub still_window_s: f32,
 }
 
 impl Default for CursorSettings {
@@ -37,6 +43,8 @@ impl Default for CursorSettings {
             min_reach: 0.5,
             min_cutoff_hz: 1.5,
             beta: 4.0,
+            max_still_speed: 0.8,
+            still_window_s: 0.25,
         }
     }
 }
@@ -63,6 +71,10 @@ pub enum Click {
 pub struct CursorTracker {
     pub settings: CursorSettings,
     smoothed: Option<(HandSide, Vec2, f64)>,
+    /// The raw positions of the last [`CursorSettings::still_window_s`].
+    recent: std::collections::VecDeque<(f64, Vec2)>,
+    /// The hand was seen open and still since it was raised (a grip may press).
+    armed: bool,
     pressed: bool,
 }
 
@@ -114,6 +126,8 @@ impl CursorTracker {
         // A hand below the box is not raised (an arm swinging forwards in a walk).
         let Some((side, hand, _)) = best.filter(|b| box_of(b.0, b.1).y >= -1.0) else {
             self.smoothed = None;
+            self.recent.clear();
+            self.armed = false;
             return (None, self.release());
         };
         let Vec2 { x, y } = box_of(side, hand);
@@ -129,7 +143,24 @@ impl CursorTracker {
             }
             _ => raw,
         };
+        if self.smoothed.is_some_and(|(was, _, _)| was != side) {
+            self.recent.clear();
+            self.armed = false;
+        }
         self.smoothed = Some((side, position, t));
+        // Still: the raw position moved little over the window.
+        while self
+            .recent
+            .front()
+            .is_some_and(|&(t0, _)| t - t0 > f64::from(s.still_window_s) || t0 > t)
+        {
+            self.recent.pop_front();
+        }
+        let still = self.recent.front().is_some_and(|&(t0, p0)| {
+            t - t0 >= f64::from(s.still_window_s) * 0.5
+                && (raw - p0).length() <= s.max_still_speed * (t - t0) as f32
+        });
+        self.recent.push_back((t, raw));
         let closed = states[match side {
             HandSide::Left => 0,
             HandSide::Right => 1,
@@ -138,8 +169,12 @@ impl CursorTracker {
             HandSide::Left => 0,
             HandSide::Right => 1,
         }] == HandState::Open;
-        let click = if closed && !self.pressed {
+        if opened && still {
+            self.armed = true;
+        }
+        let click = if closed && !self.pressed && self.armed && still {
             self.pressed = true;
+            self.armed = false;
             Some(Click::Press)
         } else if opened && self.pressed {
             self.pressed = false;
@@ -155,6 +190,11 @@ impl CursorTracker {
             }),
             click,
         )
+    }
+
+    /// Whether a grip would press now (the hand was seen open and still since it was raised).
+    pub fn armed(&self) -> bool {
+        self.armed
     }
 
     fn release(&mut self) -> Option<Click> {
@@ -222,7 +262,7 @@ mod tests {
             "{p}"
         );
         // Grip, then open: a press then a release.
-        let t = 1.5;
+        let t = 1.2;
         assert_eq!(
             c.update(&frame(t, Vec3::new(-0.1, 0.05, 0.4)), closed).1,
             Some(Click::Press)
@@ -237,6 +277,21 @@ mod tests {
                 .1,
             Some(Click::Release)
         );
+        // A hand read closed as it rises (no open, still hand seen yet) does not press.
+        let mut c2 = CursorTracker::default();
+        for k in 0..10 {
+            let y = -0.6 + 0.07 * k as f32;
+            let (_, click) = c2.update(&frame(k as f64 / 30.0, Vec3::new(0.3, y, 0.4)), closed);
+            assert_eq!(click, None, "frame {k}");
+        }
+        // Held still and open, then closed: a press.
+        let mut pressed = false;
+        for k in 10..40 {
+            let states = if k < 30 { open } else { closed };
+            let (_, click) = c2.update(&frame(k as f64 / 30.0, Vec3::new(0.3, 0.0, 0.4)), states);
+            pressed |= click == Some(Click::Press);
+        }
+        assert!(pressed);
         // Pressed and the hand drops: released.
         c.update(&frame(t + 0.1, Vec3::new(-0.1, 0.05, 0.4)), closed);
         let (cur, click) = c.update(&frame(t + 0.13, Vec3::new(0.2, -0.7, 0.0)), closed);

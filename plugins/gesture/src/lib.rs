@@ -1,11 +1,14 @@
 //! Hands from depth and the gestures made with them: whether a hand is open or closed
 //! ([`hand`]: seed 000's App. C method and ours), synthetic hands to train and test them on
-//! ([`synth`]).
+//! ([`synth`]), scripted people making gestures ([`script`]), and the reader of all of it
+//! frame by frame ([`reader`]).
 #![forbid(unsafe_code)]
 
 pub mod cursor;
 pub mod eval;
 pub mod hand;
+pub mod reader;
+pub mod script;
 pub mod swipe;
 pub mod synth;
 
@@ -20,6 +23,22 @@ pub enum HandSide {
 }
 
 impl HandSide {
+    /// The rig's bone-name suffix of this side.
+    pub fn suffix(self) -> &'static str {
+        match self {
+            HandSide::Left => "_l",
+            HandSide::Right => "_r",
+        }
+    }
+
+    /// +1 for the left arm (the body's +X side in model space), -1 for the right.
+    pub fn outward(self) -> f32 {
+        match self {
+            HandSide::Left => 1.0,
+            HandSide::Right => -1.0,
+        }
+    }
+
     /// This side's hand, wrist and elbow Kinect joints.
     pub fn arm_joints(self) -> [fitroom_sensor::KinectJoint; 3] {
         use fitroom_sensor::KinectJoint::*;

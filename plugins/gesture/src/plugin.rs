@@ -8,12 +8,11 @@ use fitroom_depth::plugin::DepthFeed;
 use fitroom_schedule::FitroomSystems;
 use fitroom_sensor::plugin::SensorFeed;
 
-use crate::cursor::{Click, Cursor, CursorTracker};
-use crate::hand::classify::{HandLook, HandModel, look};
-use crate::hand::region::HandJoints;
-use crate::hand::state::HandFilter;
-use crate::swipe::{Swipe, SwipeDetector, SwipeDirection};
-use crate::{HandSide, HandState};
+use crate::HandState;
+use crate::cursor::{Click, Cursor};
+use crate::hand::classify::HandModel;
+use crate::reader::GestureReader;
+use crate::swipe::{Swipe, SwipeDirection};
 
 /// A gesture the kiosk may act on.
 #[derive(Message, Clone, Copy, Debug, PartialEq, Eq)]
@@ -36,13 +35,10 @@ pub struct Gestures {
     pub error: Option<String>,
 }
 
-/// The detectors.
+/// The detectors, and the depth frame last read.
 #[derive(Resource)]
 struct GestureState {
-    model: Option<HandModel>,
-    filters: [HandFilter; 2],
-    swipes: SwipeDetector,
-    cursor: CursorTracker,
+    reader: GestureReader,
     depth_frame: u64,
 }
 
@@ -61,10 +57,7 @@ impl Plugin for GesturePlugin {
         app.add_message::<GestureEvent>()
             .insert_resource(Gestures { error, ..default() })
             .insert_resource(GestureState {
-                model,
-                filters: [HandFilter::default(); 2],
-                swipes: SwipeDetector::default(),
-                cursor: CursorTracker::default(),
+                reader: GestureReader::new(model),
                 depth_frame: 0,
             })
             .configure_sets(PostUpdate, GestureSystems.in_set(FitroomSystems::Gesture))
@@ -86,29 +79,26 @@ fn read_gestures(
         .as_ref()
         .filter(|d| d.frames_received != state.depth_frame)
         .and_then(|d| d.latest.clone().map(|f| (d.frames_received, f)));
+    let reader = &mut state.reader;
     let last = feed.new_frames.len().saturating_sub(1);
     for (k, frame) in feed.new_frames.iter().enumerate() {
         if k == last {
-            for (i, side) in [HandSide::Left, HandSide::Right].into_iter().enumerate() {
-                let seen = match (&depth_frame, &state.model) {
-                    (Some((_, depth)), Some(model)) => {
-                        look(depth, &HandJoints::of_frame(frame, side), model)
-                    }
-                    _ => HandLook::UNSEEN,
-                };
-                if depth_frame.is_some() || depth.is_none() {
-                    gestures.hands[i] = state.filters[i].update(&seen);
-                    gestures.p_open[i] = state.filters[i].p_open;
-                }
+            match (&depth_frame, &depth) {
+                (Some((_, d)), _) => reader.read_hands(frame, Some(d)),
+                (None, None) => reader.read_hands(frame, None),
+                // Depth exists but no new frame came: the hands keep their states.
+                (None, Some(_)) => {}
             }
+            gestures.hands = reader.hands;
+            gestures.p_open = reader.p_open;
         }
-        if let Some(swipe) = state.swipes.update(frame) {
+        let step = reader.step(frame);
+        if let Some(swipe) = step.swipe {
             gestures.last_swipe = Some(swipe);
             events.write(GestureEvent::Swipe(swipe.direction));
         }
-        let (cursor, click) = state.cursor.update(frame, gestures.hands);
-        gestures.cursor = cursor;
-        match click {
+        gestures.cursor = step.cursor;
+        match step.click {
             Some(Click::Press) => {
                 events.write(GestureEvent::Press);
             }

@@ -191,15 +191,55 @@ impl<'a> HandStudio<'a> {
 /// fingers as `pose` says (model space: the body faces +Z, +X its left, +Y up).
 pub fn hand_pose_locals(model: &BodyModel, rest: &RestPose, pose: &HandPose) -> Vec<Quat> {
     let mut locals = vec![Quat::IDENTITY; model.bones.len()];
-    let sfx = match pose.side {
-        HandSide::Left => "_l",
-        HandSide::Right => "_r",
+    let outward = pose.side.outward();
+    let raise = pose.arm_raise_deg.to_radians();
+    let lean = pose.forearm_lean_deg.to_radians();
+    let spread_out = 12f32.to_radians();
+    let upper_dir = Vec3::new(
+        outward * spread_out.sin(),
+        -raise.cos() * spread_out.cos(),
+        raise.sin() * spread_out.cos(),
+    );
+    // The forearm upright, leaning forwards, a little inwards (the hand before the chest).
+    let forearm_dir = Vec3::new(-outward * 0.15, lean.cos(), lean.sin()).normalize();
+    let arm = ArmPose {
+        upper_dir,
+        forearm_dir,
+        // The palm to the mirror (+Z), turned by `turn_deg`.
+        palm: Quat::from_axis_angle(forearm_dir, outward * pose.turn_deg.to_radians()) * Vec3::Z,
+        tilt_deg: pose.tilt_deg,
+        curl: pose.curl,
+        spread: pose.spread,
     };
-    // +1 for the left arm (+X side), -1 for the right.
-    let outward = match pose.side {
-        HandSide::Left => 1.0,
-        HandSide::Right => -1.0,
-    };
+    pose_arm(model, rest, &mut locals, pose.side, &arm);
+    locals
+}
+
+/// How one arm is posed (model space: the body faces +Z, +X its left, +Y up).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ArmPose {
+    /// The upper arm's and the forearm's directions (unit).
+    pub upper_dir: Vec3,
+    pub forearm_dir: Vec3,
+    /// Where the palm should face (its part across the forearm is what counts).
+    pub palm: Vec3,
+    /// The wrist bent forwards (+) or back (-), degrees.
+    pub tilt_deg: f32,
+    /// Finger curl (0 straight, 1 a tight fist) and an open hand's spread (1 natural).
+    pub curl: f32,
+    pub spread: f32,
+}
+
+/// Poses `side`'s arm, hand and fingers as `arm` says, on top of `locals` (per-bone rotations
+/// from rest; the other bones' are kept).
+pub fn pose_arm(
+    model: &BodyModel,
+    rest: &RestPose,
+    locals: &mut [Quat],
+    side: HandSide,
+    arm: &ArmPose,
+) {
+    let sfx = side.suffix();
     let bone = |name: &str| model.bone_index(&format!("{name}{sfx}"));
     let globals = |locals: &[Quat]| forward_kinematics(&model.bones, rest, locals, Vec3::ZERO);
     // Turns bone `b` by the global rotation `q` (about its head).
@@ -213,18 +253,9 @@ pub fn hand_pose_locals(model: &BodyModel, rest: &RestPose, pose: &HandPose) -> 
         bone("lowerarm_twist"),
         bone("hand"),
     ) else {
-        return locals;
+        return;
     };
-    let raise = pose.arm_raise_deg.to_radians();
-    let lean = pose.forearm_lean_deg.to_radians();
-    let spread_out = 12f32.to_radians();
-    let upper_dir = Vec3::new(
-        outward * spread_out.sin(),
-        -raise.cos() * spread_out.cos(),
-        raise.sin() * spread_out.cos(),
-    );
-    // The forearm upright, leaning forwards, a little inwards (the hand before the chest).
-    let forearm_dir = Vec3::new(-outward * 0.15, lean.cos(), lean.sin()).normalize();
+    let forearm_dir = arm.forearm_dir;
     let aim = |locals: &mut [Quat], b: usize, end: usize, want: Vec3| {
         let g = globals(locals);
         let now = (g[end].translation - g[b].translation).normalize_or_zero();
@@ -232,23 +263,21 @@ pub fn hand_pose_locals(model: &BodyModel, rest: &RestPose, pose: &HandPose) -> 
             turn(locals, b, Quat::from_rotation_arc(now, want));
         }
     };
-    aim(&mut locals, upper, lower, upper_dir);
-    aim(&mut locals, lower, hand, forearm_dir);
+    aim(locals, upper, lower, arm.upper_dir);
+    aim(locals, lower, hand, forearm_dir);
     // Twist the forearm (half at the elbow, half at the wrist's end) until the palm faces
-    // the mirror (+Z), turned by `turn_deg`.
-    let want_palm =
-        Quat::from_axis_angle(forearm_dir, outward * pose.turn_deg.to_radians()) * Vec3::Z;
-    if let Some((palm, _, _)) = hand_frame(model, &globals(&locals), sfx) {
+    // `arm.palm`.
+    if let Some((palm, _, _)) = hand_frame(model, &globals(locals), sfx) {
         let flat = |v: Vec3| (v - forearm_dir * v.dot(forearm_dir)).normalize_or_zero();
-        let (a, b) = (flat(palm), flat(want_palm));
+        let (a, b) = (flat(palm), flat(arm.palm));
         let angle = a.cross(b).dot(forearm_dir).atan2(a.dot(b));
         turn(
-            &mut locals,
+            locals,
             lower,
             Quat::from_axis_angle(forearm_dir, angle * 0.5),
         );
         turn(
-            &mut locals,
+            locals,
             twist,
             Quat::from_axis_angle(forearm_dir, angle * 0.5),
         );
@@ -256,25 +285,25 @@ pub fn hand_pose_locals(model: &BodyModel, rest: &RestPose, pose: &HandPose) -> 
     // The hand straight on the forearm (the rig's rest hand is bent a little aside), then
     // bent at the wrist about its radial axis (positive: the fingers towards the palm).
     if let Some(knuckle) = bone("middle_01") {
-        aim(&mut locals, hand, knuckle, forearm_dir);
+        aim(locals, hand, knuckle, forearm_dir);
     }
-    let Some((palm, along, _)) = hand_frame(model, &globals(&locals), sfx) else {
-        return locals;
+    let Some((palm, along, _)) = hand_frame(model, &globals(locals), sfx) else {
+        return;
     };
     let hinge = along.cross(palm).normalize_or_zero();
     turn(
-        &mut locals,
+        locals,
         hand,
-        Quat::from_axis_angle(hinge, pose.tilt_deg.to_radians()),
+        Quat::from_axis_angle(hinge, arm.tilt_deg.to_radians()),
     );
-    let Some((palm, along, radial)) = hand_frame(model, &globals(&locals), sfx) else {
-        return locals;
+    let Some((palm, along, radial)) = hand_frame(model, &globals(locals), sfx) else {
+        return;
     };
     let hinge = along.cross(palm).normalize_or_zero();
     // Abduction: the fingers fan out about the palm's normal, towards the radial side for
     // the index, away from it for the ring and little fingers.
     let fan = along.cross(radial).normalize_or_zero();
-    let c = pose.curl;
+    let c = arm.curl;
     for (finger, fan_deg) in [
         ("index", 9.0),
         ("middle", 0.0),
@@ -287,11 +316,11 @@ pub fn hand_pose_locals(model: &BodyModel, rest: &RestPose, pose: &HandPose) -> 
                 continue;
             };
             if k == 0 {
-                let fan_angle = f32::to_radians(fan_deg * pose.spread * (1.0 - c));
-                turn(&mut locals, b, Quat::from_axis_angle(fan, fan_angle));
+                let fan_angle = f32::to_radians(fan_deg * arm.spread * (1.0 - c));
+                turn(locals, b, Quat::from_axis_angle(fan, fan_angle));
             }
             turn(
-                &mut locals,
+                locals,
                 b,
                 Quat::from_axis_angle(hinge, f32::to_radians(*deg)),
             );
@@ -302,18 +331,18 @@ pub fn hand_pose_locals(model: &BodyModel, rest: &RestPose, pose: &HandPose) -> 
     // fingers' middle joints, just in front of them), as far as the curl goes.
     let (Some(t1), Some(t2), Some(t3)) = (bone("thumb_01"), bone("thumb_02"), bone("thumb_03"))
     else {
-        return locals;
+        return;
     };
     if c < 0.5 {
         turn(
-            &mut locals,
+            locals,
             t1,
-            Quat::from_axis_angle(fan, f32::to_radians(12.0 * pose.spread)),
+            Quat::from_axis_angle(fan, f32::to_radians(12.0 * arm.spread)),
         );
     } else {
-        let g = globals(&locals);
+        let g = globals(locals);
         let (Some(i2), Some(m2)) = (bone("index_02"), bone("middle_02")) else {
-            return locals;
+            return;
         };
         let front = palm * 0.018;
         let targets = [
@@ -321,16 +350,15 @@ pub fn hand_pose_locals(model: &BodyModel, rest: &RestPose, pose: &HandPose) -> 
             (t2, t3, g[m2].translation + front),
         ];
         for (b, end, target) in targets {
-            let g = globals(&locals);
+            let g = globals(locals);
             let want = (target - g[b].translation).normalize_or_zero();
             let now = (g[end].translation - g[b].translation).normalize_or_zero();
             if want != Vec3::ZERO && now != Vec3::ZERO {
                 let full = Quat::from_rotation_arc(now, want);
-                turn(&mut locals, b, Quat::IDENTITY.slerp(full, c));
+                turn(locals, b, Quat::IDENTITY.slerp(full, c));
             }
         }
     }
-    locals
 }
 
 /// The posed hand's palm normal (out of the palm), its direction from the wrist to the

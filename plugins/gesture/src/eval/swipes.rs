@@ -61,7 +61,7 @@ impl ScriptedSwipe {
 }
 
 /// Minimum-jerk progress from 0 to 1 over `x` in [0, 1].
-fn min_jerk(x: f32) -> f32 {
+pub(crate) fn min_jerk(x: f32) -> f32 {
     let x = x.clamp(0.0, 1.0);
     x * x * x * (10.0 - 15.0 * x + 6.0 * x * x)
 }
