@@ -22,10 +22,11 @@ pub struct Inputs {
     #[command(flatten)]
     pub body: BodyArg,
     /// Where frames come from: `bvh:FILE` (a recorded clip), `synthetic` (the synthetic
-    /// Kinect v1 seeing the avatar, which the clip drives), `performer` (the synthetic
-    /// Kinect v1 filming the clip's performer, our tracker driving the avatar), `fakenect:DIR`
-    /// (a depth recording), `kinect` (a Kinect v1 through libfreenect). Default: the
-    /// configuration's (`performer`).
+    /// Kinect v1 seeing the avatar, which the clip drives), `performer` or `performer:FILE`
+    /// (the synthetic Kinect v1 filming a performer who plays the clip, or FILE: a clip or a
+    /// gesture script such as assets/motions/gestures.ron, in which the person swipes and
+    /// grips; our tracker drives the avatar), `fakenect:DIR` (a depth recording), `kinect` (a
+    /// Kinect v1 through libfreenect). Default: the configuration's (`performer`).
     #[arg(long)]
     pub sensor: Option<String>,
     /// With the synthetic sensor: a box (0.5 x 1 x 0.5 m) standing at sensor-space X,Z metres
@@ -41,7 +42,8 @@ pub struct Inputs {
     /// Play a `fakenect:DIR` recording once instead of looping it.
     #[arg(long)]
     pub replay_once: bool,
-    /// BVH clip that drives the avatar (default: the embedded assets/motions/walk.bvh).
+    /// BVH clip that drives the avatar (default: the embedded assets/motions/walk.bvh), or
+    /// with the `performer` sensor a gesture script (`.ron`).
     #[arg(long)]
     pub motion: Option<PathBuf>,
     /// Replay the clip on a treadmill: the performer's hip centre stays where it is at the
@@ -183,7 +185,7 @@ pub fn options(mode: Mode, inputs: &Inputs) -> Result<AppOptions> {
     };
     let motion = match (&inputs.motion, &sensor) {
         (Some(motion), _) => motion.clone(),
-        (None, SensorSpec::Bvh(clip)) => clip.clone(),
+        (None, SensorSpec::Bvh(clip) | SensorSpec::Performer(Some(clip))) => clip.clone(),
         (None, _) => defaults.motion,
     };
     let sensor = sensor.with_clip(&motion);

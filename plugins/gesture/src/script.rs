@@ -187,7 +187,7 @@ impl GestureScript {
                     }
                     ("seconds", seconds, 0.1..=3.0)
                 }
-                Step::Grip { seconds, .. } => ("seconds", seconds, 0.1..=10.0),
+                Step::Grip { seconds, .. } => ("seconds", seconds, 0.1..=600.0),
             };
             if !range.contains(&value) {
                 return Err(invalid(format!(

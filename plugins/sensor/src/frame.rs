@@ -168,6 +168,21 @@ impl SensorFrame {
     pub fn joint(&self, joint: KinectJoint) -> &JointSample {
         &self.joints[joint.index()]
     }
+
+    /// The frame's mirror image: sensor x negated, the body's left and right joints swapped,
+    /// each orientation reflected (S R S with S = diag(-1, 1, 1): the bone's +Y reflected, X
+    /// negated to stay a rotation).
+    pub fn mirrored(&self) -> SensorFrame {
+        let mut out = self.clone();
+        for joint in KinectJoint::ALL {
+            let mut s = *self.joint(joint.mirror());
+            s.position.x = -s.position.x;
+            let q = s.orientation;
+            s.orientation = glam::Quat::from_xyzw(q.x, -q.y, -q.z, q.w);
+            out.joints[joint.index()] = s;
+        }
+        out
+    }
 }
 
 /// The twist-zero frame of a bone pointing along `direction` (sensor space) for a person facing
@@ -190,7 +205,42 @@ pub fn bone_reference_frame(direction: Vec3) -> Quat {
 
 #[cfg(test)]
 mod mirror_tests {
-    use super::KinectJoint;
+    use super::{JointSample, KinectJoint, SensorFrame};
+    use glam::{Quat, Vec3};
+
+    /// The mirrored frame is the reflection: a joint's image is where the other side's joint
+    /// is reflected, and its orientation turns the reflected vectors as the original turns
+    /// the vectors (q' S v = S q v); mirroring twice gives the frame back.
+    #[test]
+    fn a_mirrored_frame_is_the_reflection() {
+        let mut f = SensorFrame {
+            timestamp_s: 0.0,
+            sequence: 0,
+            joints: [JointSample {
+                position: Vec3::new(0.0, 0.0, 2.0),
+                orientation: Quat::IDENTITY,
+                confidence: 1.0,
+            }; KinectJoint::COUNT],
+        };
+        let left = KinectJoint::HandLeft.index();
+        f.joints[left].position = Vec3::new(-0.3, 0.2, 2.1);
+        f.joints[left].orientation = Quat::from_rotation_z(0.4) * Quat::from_rotation_x(0.2);
+        f.joints[left].confidence = 0.5;
+        let m = f.mirrored();
+        let image = m.joint(KinectJoint::HandRight);
+        assert_eq!(image.position, Vec3::new(0.3, 0.2, 2.1));
+        assert_eq!(image.confidence, 0.5);
+        let s = |v: Vec3| Vec3::new(-v.x, v.y, v.z);
+        for v in [Vec3::X, Vec3::Y, Vec3::new(0.1, 0.5, -0.2)] {
+            let want = s(f.joints[left].orientation * v);
+            assert!((image.orientation * s(v) - want).length() < 1e-5);
+        }
+        let back = m.mirrored();
+        for (a, b) in back.joints.iter().zip(&f.joints) {
+            assert!(a.position.distance(b.position) < 1e-6);
+            assert!(a.orientation.angle_between(b.orientation) < 1e-4);
+        }
+    }
 
     #[test]
     fn mirroring_swaps_sides_by_name_and_is_its_own_inverse() {

@@ -258,7 +258,7 @@ pub fn false_swipes(
     let mut swipes = 0;
     for r in 0..repeats {
         let played: Vec<SensorFrame> = if r % 2 == 1 {
-            clean.iter().map(mirrored).collect()
+            clean.iter().map(SensorFrame::mirrored).collect()
         } else {
             clean.clone()
         };
@@ -277,16 +277,4 @@ pub fn false_swipes(
         seconds: count as f64 / fps * repeats as f64,
         swipes,
     })
-}
-
-/// `frame` mirrored left to right (sensor x negated, left and right joints swapped).
-pub fn mirrored(frame: &SensorFrame) -> SensorFrame {
-    let mut out = frame.clone();
-    for joint in KinectJoint::ALL {
-        let other = joint.mirror();
-        let mut s = *frame.joint(other);
-        s.position.x = -s.position.x;
-        out.joints[joint.index()] = s;
-    }
-    out
 }
