@@ -428,15 +428,26 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
             _ => None,
         };
         let orbit = options.mode == Mode::Design;
+        // The kiosk is a mirror: its camera draws the scene mirrored (the person's right hand
+        // on the screen's right); headless runs and the designer show the sensor's view.
+        let mirror = matches!(options.mode, Mode::Kiosk { .. }) && options.config.display.mirror;
+        let view = RoomView {
+            image_target,
+            orbit,
+            mirror,
+        };
         app.add_systems(
             Startup,
             move |commands: Commands,
                   images: ResMut<Assets<Image>>,
                   meshes: ResMut<Assets<Mesh>>,
                   materials: ResMut<Assets<StandardMaterial>>| {
-                spawn_room(commands, images, meshes, materials, image_target, orbit)
+                spawn_room(commands, images, meshes, materials, view)
             },
         );
+        if mirror {
+            app.add_systems(Update, kiosk::show_both_faces);
+        }
     }
     match options.mode {
         Mode::Kiosk { .. } => {
@@ -494,14 +505,27 @@ pub struct LoadTimings {
 #[derive(Resource, Clone)]
 pub struct OffscreenTarget(pub Handle<Image>);
 
+/// How the room is seen: offscreen (headless), by the designer's orbit camera, or by the
+/// kiosk's camera, mirrored or not.
+#[derive(Clone, Copy, Debug)]
+struct RoomView {
+    image_target: Option<UVec2>,
+    orbit: bool,
+    mirror: bool,
+}
+
 fn spawn_room(
     mut commands: Commands,
     mut images: ResMut<Assets<Image>>,
     mut meshes: ResMut<Assets<Mesh>>,
     mut materials: ResMut<Assets<StandardMaterial>>,
-    image_target: Option<UVec2>,
-    orbit: bool,
+    view: RoomView,
 ) {
+    let RoomView {
+        image_target,
+        orbit,
+        mirror,
+    } = view;
     // Floor: a large matte disc.
     commands.spawn((
         Mesh3d(meshes.add(Circle::new(6.0))),
@@ -555,6 +579,13 @@ fn spawn_room(
             commands.spawn((Camera3d::default(), orbit.transform(), orbit));
         }
         None => {
+            // A camera scaled -1 along its own x draws the mirror image (the kiosk's framing
+            // moves it, keeping the scale).
+            let camera_transform = if mirror {
+                camera_transform.with_scale(kiosk::MIRRORED)
+            } else {
+                camera_transform
+            };
             commands.spawn((Camera3d::default(), camera_transform, kiosk::MirrorCamera));
         }
     }

@@ -103,6 +103,15 @@ pub struct DisplayConfig {
     pub fullscreen: bool,
     pub width: u32,
     pub height: u32,
+    /// The kiosk shows the person's mirror image (their right hand on the screen's right);
+    /// `false`: as the camera sees them. Read at start. Headless runs and the designer never
+    /// mirror.
+    #[serde(default = "mirror_by_default")]
+    pub mirror: bool,
+}
+
+fn mirror_by_default() -> bool {
+    true
 }
 
 /// Why a configuration file is refused.

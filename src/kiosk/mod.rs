@@ -118,6 +118,29 @@ fn draw_debug_skeletons(
 #[derive(Component)]
 pub struct MirrorCamera;
 
+/// The mirrored kiosk camera's scale: -1 along its own x.
+pub const MIRRORED: Vec3 = Vec3::new(-1.0, 1.0, 1.0);
+
+/// Seen through a mirrored camera every triangle's winding is reversed, so the faces a
+/// material culls as back faces are its front ones, and a double-sided material would light
+/// its front faces as back faces (dark): the kiosk's materials draw both faces, lit by their
+/// own normals (the body is closed and the depth test hides its inside; a garment's inside,
+/// seen at a hem, is lit as its outside).
+pub fn show_both_faces(
+    mut events: MessageReader<AssetEvent<StandardMaterial>>,
+    mut materials: ResMut<Assets<StandardMaterial>>,
+) {
+    for event in events.read() {
+        if let AssetEvent::Added { id } = event
+            && let Some(mut material) = materials.get_mut(*id)
+            && (material.cull_mode.is_some() || material.double_sided)
+        {
+            material.cull_mode = None;
+            material.double_sided = false;
+        }
+    }
+}
+
 /// Systems of the kiosk plugin.
 #[derive(SystemSet, Debug, Clone, PartialEq, Eq, Hash)]
 pub enum KioskSystems {
@@ -311,7 +334,9 @@ pub fn snap_camera(world: &mut World) {
     };
     let mut cameras = world.query_filtered::<&mut Transform, With<MirrorCamera>>();
     for mut transform in cameras.iter_mut(world) {
-        *transform = framing(pelvis);
+        let framed = framing(pelvis);
+        transform.translation = framed.translation;
+        transform.rotation = framed.rotation;
     }
 }
 
