@@ -48,6 +48,21 @@ pub enum GestureCommand {
     },
     /// Hand-state accuracy per 0.5 m of distance, ours and the seed's, on held-out
     /// synthetic hands (seeds from 2^32 on; training uses seeds below).
+    /// False actions through the whole chain: each clip drives the avatar the synthetic
+    /// Kinect films (on a treadmill), the recording goes through the tracker and the kiosk's
+    /// gesture reader; every swipe and grip is counted (nobody in the clips is clicking).
+    DepthActions {
+        /// Motion clips (BVH, .bvh.gz read as is).
+        #[arg(long, default_value = "data/mocap/cmu")]
+        clips: PathBuf,
+        /// The avatar's distance from the sensor, metres.
+        #[arg(long, default_value_t = 2.5)]
+        distance_m: f32,
+        #[command(flatten)]
+        inputs: super::app::Inputs,
+        #[command(flatten)]
+        output: OutputArgs,
+    },
     Eval {
         #[command(flatten)]
         sampling: SamplingArgs,
@@ -153,6 +168,31 @@ fn trained(body: &BodyArg, args: &SamplingArgs) -> Result<HandModel> {
 
 pub fn run(command: GestureCommand) -> Result<()> {
     match command {
+        GestureCommand::DepthActions {
+            clips,
+            distance_m,
+            inputs,
+            output,
+        } => {
+            let files = clip_files(&clips)?;
+            let body = inputs.body.clone();
+            let report = super::gesture_depth::depth_actions(&files, &inputs, &body, distance_m)?;
+            output.print(&report, |r| {
+                for c in &r.clips {
+                    println!(
+                        "{:<14} {:>6.1} s  {} swipes  {} presses",
+                        c.clip, c.seconds, c.swipes, c.presses
+                    );
+                }
+                println!(
+                    "{} swipes and {} presses in {:.1} min: {:.1} false actions per 10 min (goal: at most 2)",
+                    r.swipes,
+                    r.presses,
+                    r.seconds / 60.0,
+                    r.per_10_min
+                );
+            })
+        }
         GestureCommand::Run { dump, body, output } => {
             let report = super::gesture_run::gesture_run(&dump, &body)?;
             output.print(&report, |r| {
@@ -163,8 +203,22 @@ pub fn run(command: GestureCommand) -> Result<()> {
                         .iter()
                         .map(|h| format!("{:?} {:?} ({:.2})", h.hand, h.state, h.p_open))
                         .collect();
-                    println!("{:>5} {:>7.3} s  {}", f.frame, f.time_s, hands.join(", "));
+                    let event = match (f.swipe, f.click) {
+                        (Some(s), _) => format!("  swipe {s:?}"),
+                        (None, Some(c)) => format!("  {c:?}"),
+                        (None, None) => String::new(),
+                    };
+                    println!(
+                        "{:>5} {:>7.3} s  {}{event}",
+                        f.frame,
+                        f.time_s,
+                        hands.join(", ")
+                    );
                 }
+                println!(
+                    "{:.1} s: {} swipes, {} presses",
+                    r.seconds, r.swipes, r.presses
+                );
             })
         }
         GestureCommand::Sheet { out, seed, body } => {

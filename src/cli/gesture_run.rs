@@ -1,5 +1,7 @@
-//! `fitroom gesture run --dump DIR`: any depth recording through the tracker and the hand
-//! reader; per frame, each hand's pixel, depth and state.
+//! `fitroom gesture run --dump DIR`: any depth recording through the tracker and the
+//! gesture reader the kiosk runs; per frame, each hand's pixel, depth and state, and the
+//! swipes and grips (cursor presses) it made, with their totals (false actions, on a
+//! recording of someone who is not trying to click).
 
 use std::path::Path;
 use std::sync::Arc;
@@ -7,9 +9,11 @@ use std::sync::Arc;
 use anyhow::{Context, Result};
 use fitroom_depth::DepthCamera;
 use fitroom_depth::fakenect::Recording;
-use fitroom_gesture::hand::classify::{HandModel, look};
+use fitroom_gesture::cursor::Click;
+use fitroom_gesture::hand::classify::HandModel;
 use fitroom_gesture::hand::region::HandJoints;
-use fitroom_gesture::hand::state::HandFilter;
+use fitroom_gesture::reader::GestureReader;
+use fitroom_gesture::swipe::SwipeDirection;
 use fitroom_gesture::{HandSide, HandState};
 use fitroom_tracker::{Tracker, TrackerSettings};
 use serde::Serialize;
@@ -20,6 +24,10 @@ use super::BodyArg;
 #[derive(Debug, Serialize)]
 pub struct GestureRunReport {
     pub dump: String,
+    pub seconds: f64,
+    /// Swipes and presses over the recording (the kiosk's actions: next / previous, select).
+    pub swipes: usize,
+    pub presses: usize,
     pub frames: Vec<GestureFrame>,
 }
 
@@ -29,6 +37,11 @@ pub struct GestureFrame {
     pub frame: usize,
     pub time_s: f64,
     pub hands: Vec<HandOut>,
+    /// A swipe ended here, or the cursor's hand pressed (gripped) or released.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub swipe: Option<SwipeDirection>,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub click: Option<Click>,
 }
 
 #[derive(Debug, Serialize)]
@@ -48,37 +61,49 @@ pub fn gesture_run(dump: &Path, body: &BodyArg) -> Result<GestureRunReport> {
         .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")?;
     let hands = HandModel::embedded()?;
     let recording = Recording::open(dump)?;
-    let mut filters = [HandFilter::default(); 2];
+    let mut reader = GestureReader::new(Some(hands));
     let mut frames = Vec::new();
+    let (mut swipes, mut presses, mut seconds) = (0, 0, 0.0);
     for (i, entry) in recording.depth_entries().enumerate() {
         let frame = recording
             .read_depth(entry, DepthCamera::default())
             .with_context(|| format!("{}: frame {i}", dump.display()))?;
+        seconds = frame.time_s;
         let mut out = Vec::new();
+        let (mut swipe, mut click) = (None, None);
         if let Some(tracked) = tracker.track(&frame) {
             let skeleton = tracked.sensor_frame(frame.time_s, i as u64);
+            reader.read_hands(&skeleton, Some(&frame));
             for (k, side) in [HandSide::Left, HandSide::Right].into_iter().enumerate() {
                 let joints = HandJoints::of_frame(&skeleton, side);
-                let seen = look(&frame, &joints, &hands);
-                let state = filters[k].update(&seen);
                 let pixel = frame.camera.project(joints.hand).map(|p| [p.x, p.y]);
                 out.push(HandOut {
                     hand: side,
                     pixel,
                     depth_m: joints.hand.z.is_finite().then_some(joints.hand.z),
-                    state,
-                    p_open: seen.p_open,
+                    state: reader.hands[k],
+                    p_open: reader.p_open[k],
                 });
             }
+            let step = reader.step(&skeleton);
+            swipe = step.swipe.map(|s| s.direction);
+            click = step.click;
+            swipes += usize::from(swipe.is_some());
+            presses += usize::from(click == Some(Click::Press));
         }
         frames.push(GestureFrame {
             frame: i,
             time_s: frame.time_s,
             hands: out,
+            swipe,
+            click,
         });
     }
     Ok(GestureRunReport {
         dump: dump.display().to_string(),
+        seconds,
+        swipes,
+        presses,
         frames,
     })
 }

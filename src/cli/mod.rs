@@ -14,6 +14,7 @@ pub mod app;
 pub mod body;
 pub mod cloth;
 pub mod gesture;
+pub mod gesture_depth;
 pub mod gesture_run;
 pub mod gesture_sheet;
 pub mod import;

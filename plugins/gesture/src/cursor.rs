@@ -3,8 +3,9 @@
 //! person reach the screen's corners alike), smoothed (the One Euro filter's idea: smooth
 //! when still, quick when moving), mirrored like the mirror (the person's right is the
 //! screen's right); a grip presses, opening releases. A grip presses only a hand that was
-//! seen open and held still since it was raised, and is still now: a hand read closed while
-//! it rises or drops past the body (where its region is the arm's) clicks nothing.
+//! seen open and held still for a moment since it was raised, and is still now: a hand read
+//! closed while it rises or drops past the body (where its region is the arm's), or a waving
+//! hand read closed when seen edge-on, clicks nothing.
 
 use fitroom_motion::filter::one_euro::smoothing_factor;
 use fitroom_sensor::{KinectJoint, SensorFrame};
@@ -31,6 +32,8 @@ pub struct CursorSettings {
     /// is still.
     pub max_still_speed: f32,
     pub still_window_s: f32,
+    /// How long the hand must be seen open and still before a grip may press, seconds.
+    pub arm_s: f32,
 }
 
 impl Default for CursorSettings {
@@ -45,6 +48,7 @@ impl Default for CursorSettings {
             beta: 4.0,
             max_still_speed: 0.8,
             still_window_s: 0.25,
+            arm_s: 0.3,
         }
     }
 }
@@ -73,7 +77,9 @@ pub struct CursorTracker {
     smoothed: Option<(HandSide, Vec2, f64)>,
     /// The raw positions of the last [`CursorSettings::still_window_s`].
     recent: std::collections::VecDeque<(f64, Vec2)>,
-    /// The hand was seen open and still since it was raised (a grip may press).
+    /// Since when the hand has been seen open and still (without a break).
+    open_since: Option<f64>,
+    /// The hand was seen open and still for `arm_s` since it was raised (a grip may press).
     armed: bool,
     pressed: bool,
 }
@@ -128,6 +134,7 @@ impl CursorTracker {
             self.smoothed = None;
             self.recent.clear();
             self.armed = false;
+            self.open_since = None;
             return (None, self.release());
         };
         let Vec2 { x, y } = box_of(side, hand);
@@ -146,6 +153,7 @@ impl CursorTracker {
         if self.smoothed.is_some_and(|(was, _, _)| was != side) {
             self.recent.clear();
             self.armed = false;
+            self.open_since = None;
         }
         self.smoothed = Some((side, position, t));
         // Still: the raw position moved little over the window.
@@ -170,7 +178,12 @@ impl CursorTracker {
             HandSide::Right => 1,
         }] == HandState::Open;
         if opened && still {
-            self.armed = true;
+            let since = *self.open_since.get_or_insert(t);
+            if t - since >= f64::from(s.arm_s) {
+                self.armed = true;
+            }
+        } else {
+            self.open_since = None;
         }
         let click = if closed && !self.pressed && self.armed && still {
             self.pressed = true;
@@ -292,9 +305,25 @@ mod tests {
             pressed |= click == Some(Click::Press);
         }
         assert!(pressed);
-        // Pressed and the hand drops: released.
-        c.update(&frame(t + 0.1, Vec3::new(-0.1, 0.05, 0.4)), closed);
-        let (cur, click) = c.update(&frame(t + 0.13, Vec3::new(0.2, -0.7, 0.0)), closed);
+        // Right after a release a grip does not press: the hand must be seen open a moment.
+        assert_eq!(
+            c.update(&frame(t + 0.1, Vec3::new(-0.1, 0.05, 0.4)), closed)
+                .1,
+            None
+        );
+        // Open and still for 0.4 s, then a grip: pressed; then the hand drops: released.
+        for k in 0..12 {
+            c.update(
+                &frame(t + 0.13 + k as f64 / 30.0, Vec3::new(-0.1, 0.05, 0.4)),
+                open,
+            );
+        }
+        assert_eq!(
+            c.update(&frame(t + 0.55, Vec3::new(-0.1, 0.05, 0.4)), closed)
+                .1,
+            Some(Click::Press)
+        );
+        let (cur, click) = c.update(&frame(t + 0.58, Vec3::new(0.2, -0.7, 0.0)), closed);
         assert!(cur.is_none());
         assert_eq!(click, Some(Click::Release));
     }

@@ -60,6 +60,10 @@ pub struct SwipeSettings {
     pub walk_window_s: f32,
     pub refractory_s: f32,
     pub return_s: f32,
+    /// A stroke is a swipe once the hand has not swung back `wave_back` shoulder widths
+    /// within this time (a wave swings to and fro; a swipe ends and the hand drops or rests).
+    pub confirm_s: f32,
+    pub wave_back: f32,
 }
 
 impl Default for SwipeSettings {
@@ -77,6 +81,8 @@ impl Default for SwipeSettings {
             walk_window_s: 0.5,
             refractory_s: 0.5,
             return_s: 1.2,
+            confirm_s: 0.3,
+            wave_back: 0.5,
         }
     }
 }
@@ -96,6 +102,9 @@ pub struct SwipeDetector {
     /// The hip centre and the shoulders' direction (the person's right), over time.
     hips: VecDeque<(f64, Vec3, Vec3)>,
     last: Option<Swipe>,
+    /// A stroke waiting [`SwipeSettings::confirm_s`] for the hand not to swing back (a
+    /// wave), with where the stroke ended (sideways, shoulder widths).
+    pending: Option<(Swipe, f32)>,
 }
 
 /// The person's frame: the shoulder centre, their right (unit, horizontal), up, forward
@@ -134,7 +143,8 @@ impl SwipeDetector {
         *self = Self::new(self.settings);
     }
 
-    /// Takes one skeleton frame; returns a swipe if one ended here.
+    /// Takes one skeleton frame; returns a swipe confirmed here: its stroke ended
+    /// [`SwipeSettings::confirm_s`] ago and the hand did not swing back.
     pub fn update(&mut self, frame: &SensorFrame) -> Option<Swipe> {
         let s = self.settings;
         let t = frame.timestamp_s;
@@ -165,8 +175,12 @@ impl SwipeDetector {
             let d = sample.position - centre;
             let p = Vec2::new(d.dot(right), d.y) / width;
             let reach = d.dot(forward) / width;
-            let usable =
-                !moving && (s.min_height..=s.max_height).contains(&p.y) && reach >= s.min_reach;
+            // A hand the tracker only infers (it does not see it: before the body, out of
+            // view) makes no stroke: its jumps are the tracker's, not the hand's.
+            let usable = !moving
+                && sample.confidence >= 1.0
+                && (s.min_height..=s.max_height).contains(&p.y)
+                && reach >= s.min_reach;
             track.samples.push_back((t, p, usable));
             if found.is_none()
                 && let Some(direction) = stroke(&track.samples, &s)
@@ -178,19 +192,49 @@ impl SwipeDetector {
                 });
             }
         }
-        let swipe = found?;
-        if let Some(last) = self.last {
-            let since = (t - last.time_s) as f32;
-            if since < s.refractory_s || (since < s.return_s && swipe.direction != last.direction) {
-                return None;
+        // A pending stroke becomes a swipe unless its hand swings back (a wave).
+        let mut confirmed = None;
+        if let Some((swipe, end_x)) = self.pending {
+            let k = match swipe.hand {
+                HandSide::Left => 0,
+                HandSide::Right => 1,
+            };
+            let back = self.hands[k].samples.back().map_or(0.0, |h| {
+                let moved = h.1.x - end_x;
+                match swipe.direction {
+                    SwipeDirection::Right => -moved,
+                    SwipeDirection::Left => moved,
+                }
+            });
+            if back >= s.wave_back {
+                self.pending = None;
+            } else if (t - swipe.time_s) as f32 >= s.confirm_s {
+                self.pending = None;
+                confirmed = Some(swipe);
             }
         }
-        self.last = Some(swipe);
-        // The stroke is used up: the next swipe needs a stroke of its own.
-        for track in &mut self.hands {
-            track.samples.retain(|h| h.0 >= t);
+        if let Some(swipe) = found {
+            let since_last = self
+                .last
+                .map(|last| ((t - last.time_s) as f32, last.direction));
+            let refused = since_last.is_some_and(|(since, direction)| {
+                since < s.refractory_s || (since < s.return_s && swipe.direction != direction)
+            });
+            if !refused && self.pending.is_none() {
+                let k = match swipe.hand {
+                    HandSide::Left => 0,
+                    HandSide::Right => 1,
+                };
+                let end_x = self.hands[k].samples.back().map_or(0.0, |h| h.1.x);
+                self.pending = Some((swipe, end_x));
+                self.last = Some(swipe);
+                // The stroke is used up: the next swipe needs a stroke of its own.
+                for track in &mut self.hands {
+                    track.samples.retain(|h| h.0 >= t);
+                }
+            }
         }
-        Some(swipe)
+        confirmed
     }
 
     /// Whether the body is on the move over the walk window: its hip centre faster than a

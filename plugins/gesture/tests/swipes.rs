@@ -6,7 +6,7 @@ use std::path::Path;
 use fitroom_body::BodyModel;
 use fitroom_gesture::eval::TEST_SEEDS;
 use fitroom_gesture::eval::swipes::{false_swipes, swipe_recall};
-use fitroom_gesture::swipe::{SwipeDetector, SwipeSettings};
+use fitroom_gesture::swipe::{SwipeDetector, SwipeDirection, SwipeSettings};
 use fitroom_sensor::{JointSample, KinectJoint, SensorFrame};
 use glam::{Quat, Vec3};
 
@@ -75,4 +75,57 @@ fn broken_skeletons_make_no_swipe() {
             Vec3::new((k as f32 * 0.7).sin(), 0.0, 2.0);
         assert!(d.update(&frame).is_none());
     }
+}
+
+/// A person 2 m away facing the sensor, the right hand at `x` (the person's right, metres from
+/// the shoulder centre), level with the shoulders and 0.3 m in front; confidence `seen`.
+fn raised(t: f64, x: f32, seen: f32) -> SensorFrame {
+    let centre = Vec3::new(0.0, 0.5, 2.0);
+    let mut f = SensorFrame {
+        timestamp_s: t,
+        sequence: (t * 30.0) as u64,
+        joints: [JointSample {
+            position: Vec3::new(0.0, 0.0, 2.0),
+            orientation: Quat::IDENTITY,
+            confidence: 1.0,
+        }; KinectJoint::COUNT],
+    };
+    // Facing the sensor, the person's right is the sensor's +X, forward is -Z.
+    f.joints[KinectJoint::ShoulderCenter.index()].position = centre;
+    f.joints[KinectJoint::ShoulderLeft.index()].position = centre - Vec3::X * 0.18;
+    f.joints[KinectJoint::ShoulderRight.index()].position = centre + Vec3::X * 0.18;
+    f.joints[KinectJoint::HandLeft.index()].position = centre + Vec3::new(-0.2, -0.7, 0.0);
+    let hand = &mut f.joints[KinectJoint::HandRight.index()];
+    hand.position = centre + Vec3::new(x, 0.0, -0.3);
+    hand.confidence = seen;
+    f
+}
+
+/// Sweeps the right hand from -0.2 to 0.4 m in 0.3 s, then holds or swings back (a wave),
+/// with the hand seen or only inferred; the swipes found.
+fn sweep(back: bool, seen: f32) -> Vec<SwipeDirection> {
+    let mut d = SwipeDetector::default();
+    let mut found = Vec::new();
+    for k in 0..60 {
+        let t = k as f64 / 30.0;
+        let x = match k {
+            0..10 => -0.2,
+            10..19 => -0.2 + 0.6 * (k - 10) as f32 / 9.0,
+            _ if back => (0.4 - 0.6 * (k - 19) as f32 / 9.0).max(-0.2),
+            _ => 0.4,
+        };
+        if let Some(s) = d.update(&raised(t, x, seen)) {
+            found.push(s.direction);
+        }
+    }
+    found
+}
+
+/// A sweep that ends is a swipe; the same sweep swung straight back is a wave, no swipe; a
+/// sweep of a hand the tracker only infers is none either.
+#[test]
+fn a_sweep_is_a_swipe_a_wave_is_not() {
+    assert_eq!(sweep(false, 1.0), [SwipeDirection::Right]);
+    assert_eq!(sweep(true, 1.0), []);
+    assert_eq!(sweep(false, 0.5), []);
 }
