@@ -55,8 +55,8 @@ fn app() -> App {
 }
 
 /// Updates until the garment requested has loaded and is worn (on the asset server's
-/// threads: wait on the clock); its file and name.
-fn wait_worn(app: &mut App) -> (Option<std::path::PathBuf>, Option<String>) {
+/// threads: wait on the clock); it must be the configuration's third, the skirt.
+fn assert_wears_the_skirt(app: &mut App) {
     let start = std::time::Instant::now();
     while start.elapsed().as_secs() < 60 {
         app.update();
@@ -66,7 +66,20 @@ fn wait_worn(app: &mut App) -> (Option<std::path::PathBuf>, Option<String>) {
         std::thread::sleep(std::time::Duration::from_millis(5));
     }
     let status = app.world().resource::<GarmentStatus>();
-    (status.file.clone(), status.worn.clone())
+    assert!(
+        status
+            .file
+            .as_ref()
+            .is_some_and(|p| p.ends_with("skirt.ron"))
+            && status
+                .worn
+                .as_ref()
+                .is_some_and(|w| w.to_lowercase().contains("skirt")),
+        "{:?} {:?} {:?}",
+        status.file,
+        status.worn,
+        status.error
+    );
 }
 
 fn state(app: &App) -> KioskState {
@@ -124,15 +137,7 @@ fn two_nexts_and_a_select_wear_the_third_garment() {
     );
     assert_eq!(app.world().resource::<TryOn>().worn, Some(2));
     // The garment loads and the avatar wears it.
-    let (file, worn) = wait_worn(&mut app);
-    assert!(
-        file.as_ref().is_some_and(|p| p.ends_with("skirt.ron"))
-            && worn
-                .as_ref()
-                .is_some_and(|w| w.to_lowercase().contains("skirt")),
-        "{file:?} {worn:?} {:?}",
-        app.world().resource::<GarmentStatus>().error
-    );
+    assert_wears_the_skirt(&mut app);
     // Previous wraps around to the last garment; Back returns to the one worn.
     tap(&mut app, KeyCode::ArrowLeft);
     tap(&mut app, KeyCode::ArrowLeft);
@@ -206,13 +211,6 @@ fn a_person_who_swipes_right_twice_and_grips_wears_the_third_garment() {
         assert_eq!(state(&app), KioskState::TryOn);
         let tryon = app.world().resource::<TryOn>().clone();
         assert_eq!((tryon.shown, tryon.worn), (2, Some(2)), "seed {seed}");
-        let (file, worn) = wait_worn(&mut app);
-        assert!(
-            file.as_ref().is_some_and(|p| p.ends_with("skirt.ron"))
-                && worn
-                    .as_ref()
-                    .is_some_and(|w| w.to_lowercase().contains("skirt")),
-            "{file:?} {worn:?}"
-        );
+        assert_wears_the_skirt(&mut app);
     }
 }

@@ -119,10 +119,7 @@ impl CursorTracker {
             }
         }
         let box_of = |side: HandSide, hand: Vec3| {
-            let out = match side {
-                HandSide::Left => -1.0,
-                HandSide::Right => 1.0,
-            };
+            let out = side.rightward();
             let d = (hand - centre) / width;
             Vec2::new(
                 (d.dot(right) - out * s.centre_out) / s.half_width,
@@ -169,14 +166,8 @@ impl CursorTracker {
                 && (raw - p0).length() <= s.max_still_speed * (t - t0) as f32
         });
         self.recent.push_back((t, raw));
-        let closed = states[match side {
-            HandSide::Left => 0,
-            HandSide::Right => 1,
-        }] == HandState::Closed;
-        let opened = states[match side {
-            HandSide::Left => 0,
-            HandSide::Right => 1,
-        }] == HandState::Open;
+        let closed = states[side.index()] == HandState::Closed;
+        let opened = states[side.index()] == HandState::Open;
         if opened && still {
             let since = *self.open_since.get_or_insert(t);
             if t - since >= f64::from(s.arm_s) {

@@ -31,6 +31,19 @@ impl HandSide {
         }
     }
 
+    /// This side's index in the `[left, right]` arrays.
+    pub fn index(self) -> usize {
+        match self {
+            HandSide::Left => 0,
+            HandSide::Right => 1,
+        }
+    }
+
+    /// +1 for the right hand, -1 for the left: the hand's side along the person's right.
+    pub fn rightward(self) -> f32 {
+        -self.outward()
+    }
+
     /// +1 for the left arm (the body's +X side in model space), -1 for the right.
     pub fn outward(self) -> f32 {
         match self {

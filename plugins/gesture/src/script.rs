@@ -23,7 +23,7 @@ use std::sync::Arc;
 use fitroom_body::{BodyModel, MODEL_TO_SENSOR, RestPose, forward_kinematics};
 use fitroom_depth::synthetic::{Label, SceneMesh};
 use fitroom_sensor::KinectJoint;
-use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
+use fitroom_tracker::kinect::rig_joints;
 use glam::{Quat, Vec3};
 use serde::{Deserialize, Serialize};
 
@@ -212,16 +212,27 @@ impl GestureScript {
         let hang = [body.hanging(HandSide::Left), body.hanging(HandSide::Right)];
         let mut out = Vec::new();
         let mut yaw = 0.0;
-        let hold = |out: &mut Vec<Segment>, seconds: f32, yaw: f32, arms: [ArmKey; 2]| {
-            out.push(Segment {
-                seconds,
-                yaw: (yaw, yaw),
-                arms: (arms, arms),
-            });
-        };
+        // One arm moving through `moves` (seconds, from, to), the other hanging.
+        let arm =
+            |out: &mut Vec<Segment>, yaw: f32, hand: HandSide, moves: &[(f32, ArmKey, ArmKey)]| {
+                let with = |key: ArmKey| {
+                    let mut arms = hang;
+                    arms[hand.index()] = key;
+                    arms
+                };
+                out.extend(moves.iter().map(|&(seconds, a, b)| Segment {
+                    seconds,
+                    yaw: (yaw, yaw),
+                    arms: (with(a), with(b)),
+                }));
+            };
         for step in &self.steps {
             match *step {
-                Step::Stand { seconds } => hold(&mut out, seconds, yaw, hang),
+                Step::Stand { seconds } => out.push(Segment {
+                    seconds,
+                    yaw: (yaw, yaw),
+                    arms: (hang, hang),
+                }),
                 Step::Turn { degrees, seconds } => {
                     out.push(Segment {
                         seconds: 0.8,
@@ -229,7 +240,11 @@ impl GestureScript {
                         arms: (hang, hang),
                     });
                     yaw = degrees;
-                    hold(&mut out, seconds, yaw, hang);
+                    out.push(Segment {
+                        seconds,
+                        yaw: (yaw, yaw),
+                        arms: (hang, hang),
+                    });
                 }
                 Step::Swipe {
                     hand,
@@ -239,10 +254,7 @@ impl GestureScript {
                     height,
                     reach,
                 } => {
-                    let side = match hand {
-                        HandSide::Left => -1.0,
-                        HandSide::Right => 1.0,
-                    };
+                    let side = hand.rightward();
                     let sign = match direction {
                         SwipeDirection::Right => 1.0,
                         SwipeDirection::Left => -1.0,
@@ -251,16 +263,9 @@ impl GestureScript {
                     // before the chest is the depth tracker's hardest case (it hides in
                     // front of the body), and the tracker loses it there.
                     let mid = side * 1.2;
-                    let at = |x: f32| body.at(x, height, reach);
-                    let start = at(mid - sign * travel * 0.5);
-                    let end = at(mid + sign * travel * 0.5);
-                    let raised = |wrist: Vec3| ArmKey::raised(wrist, OPEN_CURL);
-                    let i = hand_index(hand);
-                    let with = |key: ArmKey| {
-                        let mut arms = hang;
-                        arms[i] = key;
-                        arms
-                    };
+                    let at = |x: f32| ArmKey::raised(body.at(x, height, reach), OPEN_CURL);
+                    let (start, end) =
+                        (at(mid - sign * travel * 0.5), at(mid + sign * travel * 0.5));
                     // The arm rises out to the side first, then forwards to the start:
                     // outside the body's outline all the way, as people raise an arm to
                     // swipe (and where a depth tracker can follow it).
@@ -269,63 +274,46 @@ impl GestureScript {
                         curl: OPEN_CURL,
                         raised: 0.5,
                     };
-                    for (seconds, a, b) in [
-                        (0.5, hang[i], aside),
-                        (0.4, aside, raised(start)),
-                        (0.5, raised(start), raised(start)),
-                        (seconds, raised(start), raised(end)),
-                        (0.2, raised(end), raised(end)),
-                        (0.7, raised(end), hang[i]),
-                    ] {
-                        out.push(Segment {
-                            seconds,
-                            yaw: (yaw, yaw),
-                            arms: (with(a), with(b)),
-                        });
-                    }
+                    let down = hang[hand.index()];
+                    arm(
+                        &mut out,
+                        yaw,
+                        hand,
+                        &[
+                            (0.5, down, aside),
+                            (0.4, aside, start),
+                            (0.5, start, start),
+                            (seconds, start, end),
+                            (0.2, end, end),
+                            (0.7, end, down),
+                        ],
+                    );
                 }
                 Step::Grip { hand, seconds } => {
-                    let side = match hand {
-                        HandSide::Left => -1.0,
-                        HandSide::Right => 1.0,
-                    };
                     // Before and a little outside the shoulder, the forearm raised (the
                     // hand in the hand cursor's box's upper part).
-                    let wrist = body.at(side * 0.9, -0.2, 0.55);
+                    let wrist = body.at(hand.rightward() * 0.9, -0.2, 0.55);
                     let open = ArmKey::raised(wrist, OPEN_CURL);
                     let closed = ArmKey::raised(wrist, 1.0);
-                    let i = hand_index(hand);
-                    let with = |key: ArmKey| {
-                        let mut arms = hang;
-                        arms[i] = key;
-                        arms
-                    };
-                    for (seconds, a, b) in [
-                        (0.7, hang[i], open),
-                        (0.5, open, open),
-                        (0.25, open, closed),
-                        (seconds, closed, closed),
-                        (0.25, closed, open),
-                        (0.4, open, open),
-                        (0.7, open, hang[i]),
-                    ] {
-                        out.push(Segment {
-                            seconds,
-                            yaw: (yaw, yaw),
-                            arms: (with(a), with(b)),
-                        });
-                    }
+                    let down = hang[hand.index()];
+                    arm(
+                        &mut out,
+                        yaw,
+                        hand,
+                        &[
+                            (0.7, down, open),
+                            (0.5, open, open),
+                            (0.25, open, closed),
+                            (seconds, closed, closed),
+                            (0.25, closed, open),
+                            (0.4, open, open),
+                            (0.7, open, down),
+                        ],
+                    );
                 }
             }
         }
         out
-    }
-}
-
-fn hand_index(side: HandSide) -> usize {
-    match side {
-        HandSide::Left => 0,
-        HandSide::Right => 1,
     }
 }
 
@@ -408,7 +396,7 @@ impl BodyFrame {
         let length = (self.upper_m + self.forearm_m) * 0.97;
         let dir = Vec3::new(out * angle.sin(), -angle.cos(), 0.05).normalize();
         ArmKey {
-            wrist: self.shoulders[hand_index(side)] + dir * length,
+            wrist: self.shoulders[side.index()] + dir * length,
             curl: HANGING_CURL,
             raised: 0.0,
         }
@@ -417,7 +405,7 @@ impl BodyFrame {
     /// The upper arm's and forearm's directions that put `side`'s wrist at `wrist` (two-bone
     /// IK; the elbow bends down, out and back).
     fn arm_dirs(&self, side: HandSide, wrist: Vec3) -> (Vec3, Vec3) {
-        let shoulder = self.shoulders[hand_index(side)];
+        let shoulder = self.shoulders[side.index()];
         let (l1, l2) = (self.upper_m, self.forearm_m);
         let to = wrist - shoulder;
         let d = to.length().clamp((l1 - l2).abs() + 1e-3, (l1 + l2) * 0.999);
@@ -505,7 +493,7 @@ impl ScriptedPerson {
             let mut hands = [HandState::Unknown; 2];
             let mut curl = [0.0; 2];
             for side in [HandSide::Left, HandSide::Right] {
-                let i = hand_index(side);
+                let i = side.index();
                 let key = arms[i];
                 let (upper_dir, forearm_dir) = body.arm_dirs(side, key.wrist);
                 // The palm faces the thigh while hanging, the mirror when raised.
@@ -595,22 +583,7 @@ impl ScriptedPerson {
         let k = k.min(self.frames.len().saturating_sub(1));
         let locals = self.frames.get(k).map_or(&[][..], |f| &f.locals[..]);
         let globals = forward_kinematics(&self.model.bones, &self.rest, locals, Vec3::ZERO);
-        let head = |name: &str| {
-            self.model
-                .bone_index(name)
-                .and_then(|b| globals.get(b))
-                .map_or(Vec3::ZERO, |g| g.translation)
-        };
-        let to_sensor = self.to_sensor(k);
-        let mut joints = [Vec3::ZERO; KinectJoint::COUNT];
-        for (joint, bone) in JOINT_BONES {
-            let mut p = head(bone);
-            if joint == KinectJoint::Head {
-                p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
-            }
-            joints[joint.index()] = to_sensor(p);
-        }
-        joints
+        rig_joints(&self.model, &globals).map(self.to_sensor(k))
     }
 }
 

@@ -195,17 +195,16 @@ impl SwipeDetector {
         // A pending stroke becomes a swipe unless its hand swings back (a wave).
         let mut confirmed = None;
         if let Some((swipe, end_x)) = self.pending {
-            let k = match swipe.hand {
-                HandSide::Left => 0,
-                HandSide::Right => 1,
-            };
-            let back = self.hands[k].samples.back().map_or(0.0, |h| {
-                let moved = h.1.x - end_x;
-                match swipe.direction {
-                    SwipeDirection::Right => -moved,
-                    SwipeDirection::Left => moved,
-                }
-            });
+            let back = self.hands[swipe.hand.index()]
+                .samples
+                .back()
+                .map_or(0.0, |h| {
+                    let moved = h.1.x - end_x;
+                    match swipe.direction {
+                        SwipeDirection::Right => -moved,
+                        SwipeDirection::Left => moved,
+                    }
+                });
             if back >= s.wave_back {
                 self.pending = None;
             } else if (t - swipe.time_s) as f32 >= s.confirm_s {
@@ -221,11 +220,10 @@ impl SwipeDetector {
                 since < s.refractory_s || (since < s.return_s && swipe.direction != direction)
             });
             if !refused && self.pending.is_none() {
-                let k = match swipe.hand {
-                    HandSide::Left => 0,
-                    HandSide::Right => 1,
-                };
-                let end_x = self.hands[k].samples.back().map_or(0.0, |h| h.1.x);
+                let end_x = self.hands[swipe.hand.index()]
+                    .samples
+                    .back()
+                    .map_or(0.0, |h| h.1.x);
                 self.pending = Some((swipe, end_x));
                 self.last = Some(swipe);
                 // The stroke is used up: the next swipe needs a stroke of its own.

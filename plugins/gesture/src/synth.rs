@@ -13,7 +13,7 @@ use fitroom_depth::synthetic::{
     Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, next_unit,
 };
 use fitroom_sensor::KinectJoint;
-use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
+use fitroom_tracker::kinect::rig_joints;
 use glam::{Quat, Vec3};
 
 use crate::{HandSide, HandState};
@@ -161,14 +161,7 @@ impl<'a> HandStudio<'a> {
         let sensor_height = -(sole + shift.y);
         let to_sensor = |p: Vec3| turn * p + shift;
         let vertices: Vec<Vec3> = skinned.iter().map(|&p| to_sensor(p)).collect();
-        let mut joints = [Vec3::ZERO; KinectJoint::COUNT];
-        for (joint, bone) in JOINT_BONES {
-            let mut p = head(bone);
-            if joint == KinectJoint::Head {
-                p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
-            }
-            joints[joint.index()] = to_sensor(p);
-        }
+        let joints = rig_joints(m, &globals).map(to_sensor);
         let mut scene = Scene::room(-sensor_height, pose.distance_m + 1.8);
         scene.meshes.push(SceneMesh {
             positions: vertices,
@@ -405,21 +398,8 @@ pub fn standing_joints(
     let positions = model.apply_targets(&weights);
     let rest = model.rest_pose(&positions);
     let globals = forward_kinematics(&model.bones, &rest, &[], Vec3::ZERO);
-    let head = |name: &str| {
-        model
-            .bone_index(name)
-            .and_then(|b| globals.get(b))
-            .map_or(Vec3::ZERO, |g| g.translation)
-    };
     let turn = Quat::from_rotation_y(yaw_deg.to_radians()) * MODEL_TO_SENSOR;
-    let root = head("pelvis");
-    let mut joints = [Vec3::ZERO; KinectJoint::COUNT];
-    for (joint, bone) in JOINT_BONES {
-        let mut p = head(bone);
-        if joint == KinectJoint::Head {
-            p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
-        }
-        joints[joint.index()] = pelvis + turn * (p - root);
-    }
-    Ok(joints)
+    let joints = rig_joints(model, &globals);
+    let root = joints[KinectJoint::HipCenter.index()];
+    Ok(joints.map(|p| pelvis + turn * (p - root)))
 }

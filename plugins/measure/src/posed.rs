@@ -10,7 +10,7 @@ use fitroom_body::{
 use glam::{Quat, Vec3};
 
 use fitroom_sensor::KinectJoint;
-use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
+use fitroom_tracker::kinect::rig_joints;
 
 use crate::MeasureError;
 
@@ -206,20 +206,7 @@ impl<'a> Posing<'a> {
     ) -> [Vec3; KinectJoint::COUNT] {
         let m = self.model;
         let (globals, pelvis) = self.globals(&body.rest);
-        let head = |name: &str| {
-            m.bone_index(name)
-                .and_then(|b| globals.get(b))
-                .map_or(pelvis, |g| g.translation)
-        };
-        let mut out = [Vec3::ZERO; KinectJoint::COUNT];
-        for (joint, bone) in JOINT_BONES {
-            let mut p = head(bone);
-            if joint == KinectJoint::Head {
-                p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
-            }
-            out[joint.index()] = placement.pelvis + placement.rotation * (p - pelvis);
-        }
-        out
+        rig_joints(m, &globals).map(|p| placement.pelvis + placement.rotation * (p - pelvis))
     }
 
     /// `shape` morphed, posed and placed.

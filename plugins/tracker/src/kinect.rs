@@ -1,7 +1,9 @@
 //! Where the 20 Kinect v1 joints sit on the MakeHuman rig: one table for the synthetic
 //! camera's ground truth and for the tracker's output, so the two can only agree.
 
+use fitroom_body::{BodyModel, RigidTransform};
 use fitroom_sensor::KinectJoint;
+use glam::Vec3;
 
 /// The avatar bone whose head is at each Kinect joint (MakeHuman's `game_engine` rig; `_l`
 /// is the person's left, as the Kinect's `Left`), in [`KinectJoint::ALL`] order.
@@ -31,6 +33,30 @@ pub const JOINT_BONES: [(KinectJoint, &str); 20] = [
 /// How far above the head bone's head (the skull's base) the Kinect's head joint (the
 /// head's centre) sits, along the neck's direction, metres.
 pub const HEAD_ABOVE_SKULL_BASE_M: f32 = 0.09;
+
+/// The 20 Kinect joints of a posed rig (`globals`: its bones' transforms, as
+/// `forward_kinematics` gives them) in the rig's space: each at its bone's head
+/// ([`JOINT_BONES`]), the head's centre [`HEAD_ABOVE_SKULL_BASE_M`] above the skull's base
+/// along the neck. A bone the rig lacks puts its joint at the pelvis.
+pub fn rig_joints(model: &BodyModel, globals: &[RigidTransform]) -> [Vec3; KinectJoint::COUNT] {
+    let at = |name: &str| {
+        model
+            .bone_index(name)
+            .and_then(|b| globals.get(b))
+            .map(|g| g.translation)
+    };
+    let pelvis = at("pelvis").unwrap_or(Vec3::ZERO);
+    let head = |name: &str| at(name).unwrap_or(pelvis);
+    let mut joints = [Vec3::ZERO; KinectJoint::COUNT];
+    for (joint, bone) in JOINT_BONES {
+        let mut p = head(bone);
+        if joint == KinectJoint::Head {
+            p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
+        }
+        joints[joint.index()] = p;
+    }
+    joints
+}
 
 /// The rig bone whose rotation turns the Kinect bone that ends at each joint (the bone from
 /// the joint's parent to it), in [`KinectJoint::ALL`] order; for `HipCenter`, the pelvis.

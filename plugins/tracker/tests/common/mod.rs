@@ -9,8 +9,7 @@ use std::path::Path;
 use fitroom_body::{BodyModel, RestPose, RigidTransform, forward_kinematics};
 use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
 use fitroom_depth::{DepthCamera, DepthFrame};
-use fitroom_sensor::KinectJoint;
-use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
+use fitroom_tracker::kinect::rig_joints;
 use glam::{Affine3A, Quat, Vec3};
 
 pub struct Body {
@@ -83,17 +82,7 @@ impl Body {
             .model
             .skin_positions(&self.positions, &self.rest, &globals);
         let n = self.model.body_vertex_count as usize;
-        let head = |name: &str| globals[self.bone(name)].translation;
-        let joints = JOINT_BONES
-            .iter()
-            .map(|(joint, name)| {
-                let mut p = head(name);
-                if *joint == KinectJoint::Head {
-                    p += (p - head("neck_01")).normalize() * HEAD_ABOVE_SKULL_BASE_M;
-                }
-                place(p)
-            })
-            .collect();
+        let joints = rig_joints(&self.model, &globals).map(place).to_vec();
         (skin[..n].iter().map(|&p| place(p)).collect(), joints)
     }
 }
