@@ -79,7 +79,8 @@ pub fn avatar_meshes(world: &mut World) -> Option<Vec<SceneMesh>> {
         closed: true,
     }];
     let mut garments = world.query::<&WornGarment>();
-    for garment in garments.iter(world) {
+    // The twin's garment is not in front of the camera: the person is.
+    for garment in garments.iter(world).filter(|g| !g.is_twin()) {
         let (positions, _) = garment.surface();
         if positions.is_empty() {
             continue;

@@ -399,6 +399,7 @@ pub fn build_app(options: &AppOptions) -> Result<App> {
         .insert_resource(GarmentRequest {
             path: options.garment.clone(),
             size: options.garment_size.clone(),
+            compare: None,
         })
         .insert_resource(ClothSettings {
             fit_map: options.fit_map,

@@ -214,3 +214,146 @@ fn a_person_who_swipes_right_twice_and_grips_wears_the_third_garment() {
         assert_wears_the_skirt(&mut app);
     }
 }
+
+/// Updates (on the clock: garments load on the asset server's threads) until `done`.
+fn update_until(app: &mut App, what: &str, done: impl Fn(&mut App) -> bool) {
+    let start = std::time::Instant::now();
+    while !done(app) {
+        assert!(start.elapsed().as_secs() < 60, "waited a minute for {what}");
+        app.update();
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+}
+
+/// The sizes of the garment worn, smallest first, from its size chart.
+fn sizes_worn(app: &App) -> Vec<String> {
+    let status = app.world().resource::<GarmentStatus>();
+    let assets = app
+        .world()
+        .resource::<Assets<fitroom_garment::asset::GarmentAsset>>();
+    let source = status
+        .asset
+        .as_ref()
+        .and_then(|h| assets.get(h))
+        .expect("the garment worn is loaded");
+    fitroom_measure::garment_size::garment_chart(&source.0)
+        .expect("it has a size chart")
+        .sizes
+        .into_iter()
+        .map(|s| s.label)
+        .collect()
+}
+
+/// The size in a `name size` status text.
+fn size_of(worn: Option<&String>) -> Option<String> {
+    worn.and_then(|w| w.rsplit(' ').next()).map(str::to_owned)
+}
+
+#[test]
+fn compare_puts_a_twin_beside_the_avatar_in_the_next_size() {
+    let mut app = app();
+    if !app.world().contains_resource::<ButtonInput<KeyCode>>() {
+        app.init_resource::<ButtonInput<KeyCode>>();
+    }
+    update_until(&mut app, "the first garment worn in TryOn", |app| {
+        state(app) == KioskState::TryOn && app.world().resource::<GarmentStatus>().worn.is_some()
+    });
+    let sizes = sizes_worn(&app);
+    let worn_at = |app: &App| {
+        let worn = size_of(app.world().resource::<GarmentStatus>().worn.as_ref());
+        sizes.iter().position(|s| Some(s) == worn.as_ref())
+    };
+    let first = worn_at(&app).expect("a size of the chart");
+    assert!(
+        first + 1 < sizes.len(),
+        "{sizes:?}: the middle size is worn"
+    );
+
+    tap(&mut app, KeyCode::KeyV);
+    update_until(&mut app, "the twin dressed", |app| {
+        app.world()
+            .resource::<GarmentStatus>()
+            .compare_worn
+            .is_some()
+    });
+    let status = app.world().resource::<GarmentStatus>().clone();
+    assert_eq!(
+        size_of(status.compare_worn.as_ref()),
+        Some(sizes[first + 1].clone()),
+        "{status:?}"
+    );
+    assert_eq!(status.error, None);
+    // Two simulations, one the twin's; the twin's joints are the avatar's, moved beside it.
+    app.update();
+    let mut garments = app
+        .world_mut()
+        .query::<&fitroom_garment::plugin::WornGarment>();
+    let twins: Vec<bool> = garments.iter(app.world()).map(|g| g.is_twin()).collect();
+    assert_eq!(twins.len(), 2);
+    assert_eq!(twins.iter().filter(|&&t| t).count(), 1);
+    let offset = app
+        .world()
+        .resource::<fitroom_body::twin::TwinAvatar>()
+        .offset;
+    let mut avatar = app
+        .world_mut()
+        .query::<(&fitroom_body::plugin::AvatarJoint, &GlobalTransform)>();
+    let mut at = std::collections::HashMap::new();
+    for (joint, global) in avatar.iter(app.world()) {
+        at.insert(joint.0, global.translation());
+    }
+    let mut twin = app
+        .world_mut()
+        .query::<(&fitroom_body::twin::TwinJoint, &GlobalTransform)>();
+    let mut followed = 0;
+    for (joint, global) in twin.iter(app.world()) {
+        let expected = at[&joint.0] + offset;
+        assert!(
+            global.translation().distance(expected) < 1e-4,
+            "bone {}: {} vs {expected}",
+            joint.0,
+            global.translation()
+        );
+        followed += 1;
+    }
+    assert_eq!(followed, at.len());
+    // A size up moves both along.
+    tap(&mut app, KeyCode::ArrowUp);
+    update_until(&mut app, "both re-dressed", |app| {
+        worn_at(app) == Some(first + 1)
+            && app
+                .world()
+                .resource::<GarmentStatus>()
+                .compare_worn
+                .is_some()
+    });
+    let expected = if first + 2 < sizes.len() {
+        first + 2
+    } else {
+        first
+    };
+    assert_eq!(
+        size_of(
+            app.world()
+                .resource::<GarmentStatus>()
+                .compare_worn
+                .as_ref()
+        ),
+        Some(sizes[expected].clone())
+    );
+    // Compare again: one avatar, one garment.
+    tap(&mut app, KeyCode::KeyV);
+    update_until(&mut app, "the twin gone", |app| {
+        app.world()
+            .resource::<GarmentStatus>()
+            .compare_worn
+            .is_none()
+    });
+    app.update();
+    assert!(
+        !app.world()
+            .contains_resource::<fitroom_body::twin::TwinAvatar>()
+    );
+    assert_eq!(twin.iter(app.world()).count(), 0);
+    assert_eq!(garments.iter(app.world()).count(), 1);
+}

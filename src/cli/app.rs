@@ -95,6 +95,10 @@ pub struct KioskArgs {
     /// Start with the raw and filtered sensor skeletons drawn (the D key toggles them).
     #[arg(long)]
     pub skeletons: bool,
+    /// Kiosk actions performed once the avatar wears its first garment in Try on (e.g.
+    /// `compare` for two sizes side by side, `next,select`, `toggle-fit-map`).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub actions: Vec<crate::kiosk::actions::KioskAction>,
     #[command(flatten)]
     pub inputs: Inputs,
 }
@@ -244,6 +248,7 @@ pub fn kiosk(args: KioskArgs) -> Result<()> {
     };
     let mut app = build_app(&options(mode, &args.inputs)?)?;
     app.insert_resource(crate::kiosk::DebugSkeletons(args.skeletons));
+    app.insert_resource(crate::kiosk::actions::StartActions(args.actions));
     if let Some(path) = args.screenshot {
         app.add_systems(Update, screenshot_then_quit(path, args.frames));
     }

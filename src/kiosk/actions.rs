@@ -5,7 +5,8 @@
 //! In `TryOn`: `Next` / `Previous` turn the carousel of the configuration's garments,
 //! `Select` dresses the avatar in the garment shown, `Back` returns the carousel to the one
 //! worn, `SizeUp` / `SizeDown` step through the garment's sizes, `ToggleFitMap` colours the
-//! garment by its strain, `Photo` saves a PNG of the screen. In `TryOn` an avatar that wears
+//! garment by its strain, `Compare` shows the avatar's twin beside it in the next size
+//! ([`super::compare`]), `Photo` saves a PNG of the screen. In `TryOn` an avatar that wears
 //! nothing wears the carousel's garment (the configuration's first).
 
 use std::path::PathBuf;
@@ -22,7 +23,7 @@ use super::KioskState;
 use super::config::ActiveKioskConfig;
 
 /// What the person asks the kiosk to do.
-#[derive(Message, Clone, Copy, Debug, PartialEq, Eq, Hash)]
+#[derive(Message, Clone, Copy, Debug, PartialEq, Eq, Hash, clap::ValueEnum)]
 pub enum KioskAction {
     Next,
     Previous,
@@ -31,12 +32,13 @@ pub enum KioskAction {
     SizeUp,
     SizeDown,
     ToggleFitMap,
+    Compare,
     Photo,
 }
 
 impl KioskAction {
     /// The keys of each action.
-    pub const KEYS: [(KeyCode, KioskAction); 12] = [
+    pub const KEYS: [(KeyCode, KioskAction); 13] = [
         (KeyCode::ArrowRight, KioskAction::Next),
         (KeyCode::ArrowLeft, KioskAction::Previous),
         (KeyCode::Enter, KioskAction::Select),
@@ -48,6 +50,7 @@ impl KioskAction {
         (KeyCode::ArrowDown, KioskAction::SizeDown),
         (KeyCode::Minus, KioskAction::SizeDown),
         (KeyCode::KeyF, KioskAction::ToggleFitMap),
+        (KeyCode::KeyV, KioskAction::Compare),
         (KeyCode::KeyC, KioskAction::Photo),
     ];
 }
@@ -59,6 +62,8 @@ pub struct TryOn {
     pub shown: usize,
     /// The garment worn (index), once one is.
     pub worn: Option<usize>,
+    /// Two sizes side by side: the avatar's twin wears the neighbouring size.
+    pub compare: bool,
     /// The last photo saved, or why none could be.
     pub photo: Option<String>,
     /// The folder photos go to.
@@ -79,6 +84,7 @@ pub fn add(app: &mut App) {
         .add_systems(
             Update,
             (
+                start_actions,
                 keyboard_actions,
                 wheel_actions,
                 touch_actions,
@@ -88,11 +94,32 @@ pub fn add(app: &mut App) {
         )
         .add_systems(
             PostUpdate,
-            (dress_in_try_on, apply_actions)
+            (
+                dress_in_try_on,
+                apply_actions,
+                super::compare::follow_compare,
+            )
                 .chain()
                 .in_set(super::KioskSystems::Flow)
                 .after(super::kiosk_transitions),
         );
+}
+
+/// Actions performed once, as soon as the avatar wears its first garment in `TryOn`
+/// (`fitroom kiosk --actions`: demos and screenshots of the try-on screen's modes).
+#[derive(Resource, Debug, Clone, Default)]
+pub struct StartActions(pub Vec<KioskAction>);
+
+fn start_actions(
+    start: Option<ResMut<StartActions>>,
+    state: Res<State<KioskState>>,
+    status: Res<GarmentStatus>,
+    mut out: MessageWriter<KioskAction>,
+) {
+    let Some(mut start) = start else { return };
+    if *state.get() == KioskState::TryOn && status.worn.is_some() && !start.0.is_empty() {
+        out.write_batch(start.0.drain(..));
+    }
 }
 
 fn keyboard_actions(keys: Option<Res<ButtonInput<KeyCode>>>, mut out: MessageWriter<KioskAction>) {
@@ -160,6 +187,8 @@ fn garment_request(config: &ActiveKioskConfig, index: usize) -> Option<GarmentRe
     Some(GarmentRequest {
         path: Some(config.folder.join(&entry.file)),
         size: entry.size.clone(),
+        // The twin's size follows once the garment's sizes are known.
+        compare: None,
     })
 }
 
@@ -231,6 +260,7 @@ fn apply_actions(
                 }
             }
             KioskAction::ToggleFitMap => cloth.fit_map = !cloth.fit_map,
+            KioskAction::Compare => tryon.compare = !tryon.compare,
             KioskAction::Photo => {
                 let stamp = std::time::SystemTime::now()
                     .duration_since(std::time::UNIX_EPOCH)
@@ -257,7 +287,7 @@ fn apply_actions(
 }
 
 /// The size worn, from the status's `name size` text.
-fn status_size(status: &GarmentStatus) -> Option<String> {
+pub(super) fn status_size(status: &GarmentStatus) -> Option<String> {
     status
         .worn
         .as_ref()

@@ -124,10 +124,12 @@ fn depth_view(
     let texture = view.image.as_ref().map(|(_, id)| *id);
     let ctx = contexts.ctx_mut()?;
     egui::Area::new(egui::Id::new("depth-view"))
-        .anchor(egui::Align2::RIGHT_BOTTOM, egui::vec2(-16.0, -16.0))
+        // Top right: clear of the try-on panel at the bottom and of the avatars' heads.
+        .anchor(egui::Align2::RIGHT_TOP, egui::vec2(-16.0, 16.0))
         .show(ctx, |ui| {
             egui::Frame::popup(ui.style()).show(ui, |ui| {
-                ui.horizontal(|ui| {
+                ui.set_max_width(IMAGE.x);
+                ui.horizontal_wrapped(|ui| {
                     let label = if view.shown {
                         "hide depth"
                     } else {
@@ -153,7 +155,7 @@ fn depth_view(
                 if view.shown {
                     match texture {
                         Some(texture) => {
-                            ui.image((texture, egui::vec2(320.0, 240.0)));
+                            ui.image((texture, IMAGE));
                         }
                         None => {
                             ui.label("waiting for the first depth frame…");
@@ -167,6 +169,9 @@ fn depth_view(
         });
     Ok(())
 }
+
+/// The depth image's size on screen (a quarter of the sensor's pixels: a glance, not a study).
+const IMAGE: egui::Vec2 = egui::vec2(256.0, 192.0);
 
 /// `rgb` as RGBA into `out`, the person's pixels (`mask`) tinted halfway to white.
 fn to_rgba(rgb: &[u8], mask: Option<&Vec<bool>>, out: &mut Vec<u8>) {

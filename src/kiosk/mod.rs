@@ -3,6 +3,7 @@
 
 use bevy::prelude::*;
 use fitroom_body::plugin::Avatar;
+use fitroom_body::twin::TwinAvatar;
 use fitroom_motion::plugin::{AvatarMotion, MotionSystems};
 use fitroom_schedule::FitroomSystems;
 use fitroom_sensor::{KinectJoint, plugin::SensorFeed};
@@ -286,16 +287,17 @@ pub(crate) fn kiosk_transitions(
 }
 
 /// The avatar's pelvis in world space, if there is an avatar with a pose.
-fn pelvis_world(motion: &AvatarMotion, avatar: &Transform) -> Option<Vec3> {
+pub(super) fn pelvis_world(motion: &AvatarMotion, avatar: &Transform) -> Option<Vec3> {
     let pelvis = motion.pipeline.skeleton().index_of("pelvis")?;
     let head = *motion.pose.heads.get(pelvis)?;
     Some(avatar.transform_point(head)).filter(|p| p.is_finite())
 }
 
 /// Where the camera settles to frame a person whose pelvis is at `pelvis`: in front of them,
-/// a little above, looking at their middle.
-fn framing(pelvis: Vec3) -> Transform {
-    let focus = Vec3::new(pelvis.x, 0.95, pelvis.z);
+/// a little above, looking at their middle (between them and their twin, when it is there).
+fn framing(pelvis: Vec3, twin: Option<&TwinAvatar>) -> Transform {
+    let beside = twin.map_or(Vec3::ZERO, |t| 0.5 * t.offset);
+    let focus = Vec3::new(pelvis.x + beside.x, 0.95, pelvis.z + beside.z);
     Transform::from_translation(focus + Vec3::new(0.0, 0.25, 3.4)).looking_at(focus, Vec3::Y)
 }
 
@@ -304,6 +306,7 @@ fn frame_person(
     time: Res<Time>,
     avatar: Query<&Transform, (With<Avatar>, Without<MirrorCamera>)>,
     motion: Option<Res<AvatarMotion>>,
+    twin: Option<Res<TwinAvatar>>,
     mut camera: Query<&mut Transform, With<MirrorCamera>>,
 ) {
     let (Some(motion), Ok(avatar)) = (motion, avatar.single()) else {
@@ -312,7 +315,7 @@ fn frame_person(
     let Some(pelvis) = pelvis_world(&motion, avatar) else {
         return;
     };
-    let target = framing(pelvis);
+    let target = framing(pelvis, twin.as_deref());
     let blend = 1.0 - (-3.0 * time.delta_secs()).exp();
     for mut transform in &mut camera {
         transform.translation = transform.translation.lerp(target.translation, blend);
@@ -332,15 +335,17 @@ pub fn snap_camera(world: &mut World) {
     else {
         return;
     };
+    let twin = world.get_resource::<TwinAvatar>().copied();
     let mut cameras = world.query_filtered::<&mut Transform, With<MirrorCamera>>();
     for mut transform in cameras.iter_mut(world) {
-        let framed = framing(pelvis);
+        let framed = framing(pelvis, twin.as_ref());
         transform.translation = framed.translation;
         transform.rotation = framed.rotation;
     }
 }
 
 pub mod actions;
+pub mod compare;
 pub mod config;
 pub mod depth_view;
 pub mod guide;

@@ -11,16 +11,23 @@ use fitroom_gesture::plugin::Gestures;
 use fitroom_gesture::swipe::SwipeDirection;
 use fitroom_sensor::plugin::SensorFeed;
 
-use super::KioskState;
+use fitroom_body::plugin::Avatar;
+use fitroom_body::twin::TwinAvatar;
+use fitroom_motion::plugin::AvatarMotion;
+
 use super::actions::{KioskAction, TryOn, garment_sizes};
 use super::config::ActiveKioskConfig;
 use super::measure::SizeAdvice;
+use super::{KioskState, MirrorCamera};
 
 pub struct TryOnScreenPlugin;
 
 impl Plugin for TryOnScreenPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(EguiPrimaryContextPass, (try_on_screen, gesture_feedback));
+        app.add_systems(
+            EguiPrimaryContextPass,
+            (try_on_screen, size_labels, gesture_feedback),
+        );
     }
 }
 
@@ -158,6 +165,13 @@ fn try_on_screen(
                                 if ui.button(egui::RichText::new(fit).size(MEDIUM)).clicked() {
                                     actions.write(KioskAction::ToggleFitMap);
                                 }
+                                let compare = egui::Button::new(
+                                    egui::RichText::new("Two sizes").size(MEDIUM),
+                                )
+                                .selected(tryon.compare);
+                                if ui.add(compare).clicked() {
+                                    actions.write(KioskAction::Compare);
+                                }
                                 if ui
                                     .button(egui::RichText::new("Photo").size(MEDIUM))
                                     .clicked()
@@ -185,6 +199,61 @@ fn try_on_screen(
                     });
                 });
         }
+    }
+    Ok(())
+}
+
+/// Two sizes side by side: each avatar's size above its head, the recommended one marked.
+fn size_labels(
+    mut contexts: EguiContexts,
+    status: Res<GarmentStatus>,
+    advice: Res<SizeAdvice>,
+    twin: Option<Res<TwinAvatar>>,
+    motion: Option<Res<AvatarMotion>>,
+    avatar: Query<&Transform, With<Avatar>>,
+    camera: Query<(&Camera, &GlobalTransform), With<MirrorCamera>>,
+) -> Result {
+    let (Some(twin), Some(motion), Some(compared)) = (twin, motion, &status.compare_worn) else {
+        return Ok(());
+    };
+    let (Ok(avatar), Ok((camera, view))) = (avatar.single(), camera.single()) else {
+        return Ok(());
+    };
+    let Some(pelvis) = super::pelvis_world(&motion, avatar) else {
+        return Ok(());
+    };
+    let ctx = contexts.ctx_mut()?;
+    let painter = ctx.layer_painter(egui::LayerId::new(
+        egui::Order::Foreground,
+        egui::Id::new("size-labels"),
+    ));
+    // Above the heads: the pelvis is about half the body's height up.
+    let above = Vec3::new(0.0, 0.95 * pelvis.y.max(0.5), 0.0);
+    for (at, worn) in [
+        (pelvis, status.worn.as_deref()),
+        (pelvis + twin.offset, Some(compared.as_str())),
+    ] {
+        let (Some(worn), Ok(point)) = (worn, camera.world_to_viewport(view, at + above)) else {
+            continue;
+        };
+        let size = worn.rsplit(' ').next().unwrap_or(worn);
+        let recommended = advice.size.as_deref() == Some(size);
+        let text = if recommended {
+            format!("{size} ★")
+        } else {
+            size.to_string()
+        };
+        painter.text(
+            egui::pos2(point.x, point.y),
+            egui::Align2::CENTER_BOTTOM,
+            text,
+            egui::FontId::proportional(BIG + 10.0),
+            if recommended {
+                ACCENT
+            } else {
+                egui::Color32::WHITE
+            },
+        );
     }
     Ok(())
 }

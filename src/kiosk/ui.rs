@@ -53,7 +53,8 @@ fn status_overlay(
         .anchor(egui::Align2::LEFT_TOP, egui::vec2(16.0, 16.0))
         .show(ctx, |ui| {
             egui::Frame::popup(ui.style()).show(ui, |ui| {
-                ui.set_max_width(560.0);
+                // Narrow enough that the size labels over two avatars' heads stay clear.
+                ui.set_max_width(400.0);
                 ui.heading("fitroom");
                 ui.label(format!("{fps:.0} fps"));
                 ui.label(state.get().label());

@@ -97,6 +97,8 @@ pub mod rig;
 pub mod segments;
 pub mod sizing;
 pub mod skinning;
+#[cfg(feature = "plugin")]
+pub mod twin;
 
 pub use asset::{AssetError, FORMAT_VERSION, MAGIC};
 pub use fit::{FitError, FitOptions, FitReport, FitRequest, fit};

@@ -174,6 +174,7 @@ impl Plugin for BodyPlugin {
                 hide_covered_skin.in_set(BodySystems::HideCoveredSkin),
             ),
         );
+        crate::twin::add(app);
     }
 }
 

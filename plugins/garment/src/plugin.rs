@@ -19,6 +19,8 @@
 //!   rest length, red: stretched 10% or more), like a CLO3D strain map.
 //! * With [`ClothSettings::hide_covered_skin`] (the default) the body's skin that the garment
 //!   surely covers is not drawn ([`crate::cover`], [`HiddenSkin`]).
+//! * [`GarmentRequest::compare`] dresses the avatar's twin ([`fitroom_body::twin`]) in a second
+//!   size: a second simulation on the avatar's own pose, drawn at the twin's offset.
 
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::path::PathBuf;
@@ -32,6 +34,7 @@ use bevy::{
 use fitroom_body::{
     ShapedBody,
     plugin::{AvatarBody, AvatarJoint, HiddenSkin, world_skinning},
+    twin::TwinAvatar,
 };
 use fitroom_cloth::SolverSettings;
 use fitroom_schedule::FitroomSystems;
@@ -79,6 +82,9 @@ impl Default for ClothSettings {
 pub struct GarmentRequest {
     pub path: Option<PathBuf>,
     pub size: Option<String>,
+    /// A second size of the same garment for the avatar's twin (`None`: the twin, if any,
+    /// wears nothing).
+    pub compare: Option<String>,
 }
 
 /// How the garment is doing (for the overlay and tests).
@@ -86,6 +92,8 @@ pub struct GarmentRequest {
 pub struct GarmentStatus {
     /// `name size` of the garment worn.
     pub worn: Option<String>,
+    /// `name size` of the garment the twin wears.
+    pub compare_worn: Option<String>,
     /// The garment file worn (or being loaded), and its asset (its size chart, say).
     pub file: Option<PathBuf>,
     pub asset: Option<Handle<GarmentAsset>>,
@@ -111,9 +119,16 @@ pub struct WornGarment {
     previous: Option<Vec<Affine3A>>,
     /// The drawn surface (positions, normals), kept between frames.
     surface: (Vec<Vec3>, Vec<Vec3>),
+    /// Worn by the twin (drawn at its offset; its surface is still on the avatar).
+    twin: bool,
 }
 
 impl WornGarment {
+    /// Whether the twin wears it (the depth camera sees only the avatar's garment).
+    pub fn is_twin(&self) -> bool {
+        self.twin
+    }
+
     /// The drawn surface in world space (positions, normals; empty before the first step).
     pub fn surface(&self) -> (&[Vec3], &[Vec3]) {
         (&self.surface.0, &self.surface.1)
@@ -210,6 +225,7 @@ fn request_garment(
         }
         *wearing = Wearing::default();
         status.worn = None;
+        status.compare_worn = None;
         status.asset = None;
         status.error = None;
         if let Some(hidden) = hidden.as_mut() {
@@ -339,8 +355,54 @@ pub fn strain_colour(strain_pct: f32) -> [f32; 4] {
     }
 }
 
+/// A garment built and ready to simulate: its mesh, its simulation, and the skin it covers.
+type Built = (crate::GarmentMesh, GarmentSim, Option<Vec<bool>>);
+
+/// Builds `source` in `size` on the body, its simulation ready to step.
+fn build_garment(
+    source: &crate::source::GarmentSource,
+    body: &AvatarBody,
+    size: Option<&str>,
+    settings: &ClothSettings,
+) -> Result<Built, String> {
+    let shaped = ShapedBody {
+        weights: Vec::new(),
+        positions: body.positions.clone(),
+        normals: body.normals.clone(),
+        rest_pose: body.rest.clone(),
+    };
+    let surface = BodySurface::new(&body.model, &shaped).map_err(|e| e.to_string())?;
+    let mesh = source.build(&surface, size).map_err(|e| e.to_string())?;
+    let solver = SolverSettings {
+        substeps: settings.substeps.max(1),
+        ..SolverSettings::default()
+    };
+    let garment = SimGarment::from_mesh(&mesh);
+    let sim = GarmentSim::new(&body.model, &body.positions, &body.rest, &garment, solver)
+        .map_err(|e| e.to_string())?;
+    let n = (body.model.body_vertex_count as usize)
+        .min(body.positions.len())
+        .min(body.normals.len());
+    let covered = if settings.hide_covered_skin {
+        let skin = (&body.positions[..n], &body.normals[..n]);
+        let covered = crate::cover::covered_skin(
+            &body.model,
+            skin,
+            &mesh.positions,
+            &mesh.triangles,
+            &garment.attached,
+        )
+        .map_err(|e| format!("{}: {e}", source.path().display()))?;
+        Some(covered)
+    } else {
+        None
+    };
+    Ok((mesh, sim, covered))
+}
+
 /// Dresses the avatar in the requested garment when its asset (re)loaded, the size changed or
-/// the body was reshaped; a garment that cannot be built keeps what the avatar wears.
+/// the body was reshaped, and the twin in the size compared; a garment that cannot be built
+/// keeps what the avatar wears.
 #[allow(clippy::too_many_arguments)]
 fn dress_avatar(
     mut commands: Commands,
@@ -348,6 +410,7 @@ fn dress_avatar(
     body: Option<Res<AvatarBody>>,
     settings: Res<ClothSettings>,
     garments: Res<Assets<GarmentAsset>>,
+    twin: Option<Res<TwinAvatar>>,
     mut wearing: ResMut<Wearing>,
     mut status: ResMut<GarmentStatus>,
     worn: Query<Entity, With<WornGarment>>,
@@ -372,45 +435,17 @@ fn dress_avatar(
         return;
     };
     wearing.dress = false;
-    type Built = (crate::GarmentMesh, GarmentSim, Option<Vec<bool>>);
-    let built = (|| -> Result<Built, String> {
-        let shaped = ShapedBody {
-            weights: Vec::new(),
-            positions: body.positions.clone(),
-            normals: body.normals.clone(),
-            rest_pose: body.rest.clone(),
-        };
-        let surface = BodySurface::new(&body.model, &shaped).map_err(|e| e.to_string())?;
-        let mesh = source
-            .build(&surface, request.size.as_deref())
-            .map_err(|e| e.to_string())?;
-        let solver = SolverSettings {
-            substeps: settings.substeps.max(1),
-            ..SolverSettings::default()
-        };
-        let garment = SimGarment::from_mesh(&mesh);
-        let sim = GarmentSim::new(&body.model, &body.positions, &body.rest, &garment, solver)
-            .map_err(|e| e.to_string())?;
-        let n = (body.model.body_vertex_count as usize)
-            .min(body.positions.len())
-            .min(body.normals.len());
-        let covered = if settings.hide_covered_skin {
-            let skin = (&body.positions[..n], &body.normals[..n]);
-            let covered = crate::cover::covered_skin(
-                &body.model,
-                skin,
-                &mesh.positions,
-                &mesh.triangles,
-                &garment.attached,
-            )
-            .map_err(|e| format!("{}: {e}", source.path().display()))?;
-            Some(covered)
-        } else {
-            None
-        };
-        Ok((mesh, sim, covered))
-    })();
-    let (garment, mut sim, covered) = match built {
+    let built = build_garment(source, &body, request.size.as_deref(), &settings);
+    // The twin's size failing (one this garment does not have) leaves the twin bare, not the
+    // avatar.
+    let (compared, compare_error) = match request.compare.as_deref() {
+        Some(size) => match build_garment(source, &body, Some(size), &settings) {
+            Ok(b) => (Some(b), None),
+            Err(e) => (None, Some(format!("the twin's size {size}: {e}"))),
+        },
+        None => (None, None),
+    };
+    let ((garment, sim, covered), compared) = match built.map(|b| (b, compared)) {
         Ok(b) => b,
         Err(e) => {
             warn!("garment not (re)loaded, the avatar keeps what it wears: {e}");
@@ -419,11 +454,17 @@ fn dress_avatar(
         }
     };
     let skin = world_skinning(&body, joints);
-    sim.set_measuring(false);
-    let floor = sim.set_floor(Some(0.0)).and_then(|_| sim.reset(&skin));
-    if let Err(e) = floor {
-        status.error = Some(e.to_string());
-        return;
+    let mut ready = Vec::with_capacity(2);
+    for (garment, mut sim, twin_worn) in std::iter::once((garment, sim, false))
+        .chain(compared.map(|(garment, sim, _)| (garment, sim, true)))
+    {
+        sim.set_measuring(false);
+        let floor = sim.set_floor(Some(0.0)).and_then(|_| sim.reset(&skin));
+        if let Err(e) = floor {
+            status.error = Some(e.to_string());
+            return;
+        }
+        ready.push((garment, sim, twin_worn));
     }
     for e in &worn {
         commands.entity(e).despawn();
@@ -431,41 +472,53 @@ fn dress_avatar(
     if let Some(hidden) = hidden.as_mut() {
         hidden.0 = covered;
     }
-    status.worn = Some(format!("{} {}", garment.name, garment.size));
-    status.particles = garment.positions.len();
-    status.error = None;
-    let (Some(meshes), Some(materials)) = (meshes.as_mut(), materials.as_mut()) else {
-        // Headless without a renderer: simulate without drawing.
-        commands.spawn(WornGarment {
+    status.error = compare_error;
+    status.compare_worn = None;
+    let offset = twin.map_or(Vec3::ZERO, |t| t.offset);
+    for (garment, sim, twin_worn) in ready {
+        let name = format!("{} {}", garment.name, garment.size);
+        if twin_worn {
+            status.compare_worn = Some(name);
+        } else {
+            status.worn = Some(name);
+            status.particles = garment.positions.len();
+        }
+        let worn = WornGarment {
             sim: Box::new(sim),
             mesh: Handle::default(),
             accumulated_s: 0.0,
             previous: None,
             surface: Default::default(),
-        });
-        return;
-    };
-    let (positions, normals) = sim.render_surface();
-    let mesh = meshes.add(garment_mesh((&positions, &normals), sim.triangles(), None));
-    commands.spawn((
-        WornGarment {
-            sim: Box::new(sim),
-            mesh: mesh.clone(),
-            accumulated_s: 0.0,
-            previous: None,
-            surface: Default::default(),
-        },
-        Mesh3d(mesh),
-        MeshMaterial3d(materials.add(StandardMaterial {
-            base_color: Color::srgb(0.35, 0.45, 0.75),
-            perceptual_roughness: 0.85,
-            cull_mode: None,
-            double_sided: true,
-            ..default()
-        })),
-        Transform::IDENTITY,
-        Visibility::default(),
-    ));
+            twin: twin_worn,
+        };
+        let (Some(meshes), Some(materials)) = (meshes.as_mut(), materials.as_mut()) else {
+            // Headless without a renderer: simulate without drawing.
+            commands.spawn(worn);
+            continue;
+        };
+        let (positions, normals) = worn.sim.render_surface();
+        let mesh = meshes.add(garment_mesh(
+            (&positions, &normals),
+            worn.sim.triangles(),
+            None,
+        ));
+        commands.spawn((
+            WornGarment {
+                mesh: mesh.clone(),
+                ..worn
+            },
+            Mesh3d(mesh),
+            MeshMaterial3d(materials.add(StandardMaterial {
+                base_color: Color::srgb(0.35, 0.45, 0.75),
+                perceptual_roughness: 0.85,
+                cull_mode: None,
+                double_sided: true,
+                ..default()
+            })),
+            Transform::from_translation(if twin_worn { offset } else { Vec3::ZERO }),
+            Visibility::default(),
+        ));
+    }
 }
 
 #[allow(clippy::too_many_arguments)]
@@ -485,6 +538,7 @@ fn step_garment(
     };
     let skin = world_skinning(&body, joints);
     let dt = 1.0 / settings.rate_hz.max(1.0);
+    status.frame_ms = 0.0;
     for (entity, mut g) in &mut worn {
         let start = Instant::now();
         g.accumulated_s += time.delta_secs();
@@ -518,9 +572,13 @@ fn step_garment(
                     );
                     error!("{message}");
                     status.error = Some(message);
-                    status.worn = None;
-                    if let Some(hidden) = hidden.as_mut() {
-                        hidden.0 = None;
+                    if g.twin {
+                        status.compare_worn = None;
+                    } else {
+                        status.worn = None;
+                        if let Some(hidden) = hidden.as_mut() {
+                            hidden.0 = None;
+                        }
                     }
                     commands.entity(entity).despawn();
                     taken_off = true;
@@ -535,7 +593,9 @@ fn step_garment(
                             s.blow_up.as_deref().unwrap_or("?")
                         );
                     }
-                    status.max_strain_pct = s.max_strain_pct;
+                    if !g.twin {
+                        status.max_strain_pct = s.max_strain_pct;
+                    }
                 }
                 Err(e) => {
                     status.error = Some(e.to_string());
@@ -547,14 +607,18 @@ fn step_garment(
         if taken_off {
             continue;
         }
-        status.steps += done;
-        status.dropped_steps += due - done;
+        if !g.twin {
+            status.steps += done;
+            status.dropped_steps += due - done;
+        }
         g.accumulated_s = 0.0_f32.max(g.accumulated_s - due as f32 * dt);
         // The buffer taken at the top of the loop keeps this frame's pose for the next.
         let mut previous = previous;
         previous.clone_from(&skin);
         g.previous = Some(previous);
-        status.resets = g.sim.resets();
+        if !g.twin {
+            status.resets = g.sim.resets();
+        }
         if cfg!(debug_assertions) && !g.sim.positions().iter().all(|p| p.is_finite()) {
             error!("garment positions are not finite after the step");
         }
@@ -574,7 +638,8 @@ fn step_garment(
                 strain.as_deref(),
             );
         }
-        status.frame_ms = start.elapsed().as_secs_f32() * 1e3;
+        // Both garments' time when the twin wears one.
+        status.frame_ms += start.elapsed().as_secs_f32() * 1e3;
     }
 }
 

@@ -57,6 +57,7 @@ fn request(app: &mut App, path: std::path::PathBuf, size: &str) {
     *app.world_mut().resource_mut::<GarmentRequest>() = GarmentRequest {
         path: Some(path),
         size: Some(size.to_owned()),
+        compare: None,
     };
 }
 
@@ -101,4 +102,43 @@ fn a_requested_garment_is_worn_stepped_and_resized() {
         status(&app).steps > steps,
         "the skirt keeps being simulated"
     );
+}
+
+#[test]
+fn a_second_size_dresses_the_twin_and_a_bad_one_leaves_only_the_twin_bare() {
+    let mut app = app();
+    let skirt = common::garment_path("skirt");
+    app.world_mut()
+        .resource_mut::<GarmentRequest>()
+        .clone_from(&GarmentRequest {
+            path: Some(skirt.clone()),
+            size: Some("M".into()),
+            compare: Some("L".into()),
+        });
+    run_until(&mut app, "M worn, L compared", |s| {
+        s.worn.as_deref() == Some("A-line skirt M")
+            && s.compare_worn.as_deref() == Some("A-line skirt L")
+            && s.steps >= 5
+    });
+    let mut garments = app.world_mut().query::<&WornGarment>();
+    let worn: Vec<(bool, usize)> = garments
+        .iter(app.world())
+        .map(|g| (g.is_twin(), g.surface().0.len()))
+        .collect();
+    assert_eq!(worn.len(), 2, "{worn:?}");
+    assert_eq!(worn.iter().filter(|w| w.0).count(), 1, "{worn:?}");
+    assert!(worn.iter().all(|w| w.1 > 100), "both stepped: {worn:?}");
+
+    app.world_mut().resource_mut::<GarmentRequest>().compare = Some("XXXL".into());
+    run_until(&mut app, "the bad size refused", |s| s.error.is_some());
+    let refused = status(&app);
+    let message = refused.error.clone().unwrap_or_default();
+    assert!(
+        message.contains("twin") && message.contains("XXXL"),
+        "{message}"
+    );
+    assert_eq!(refused.worn.as_deref(), Some("A-line skirt M"));
+    assert_eq!(refused.compare_worn, None);
+    app.update();
+    assert_eq!(garments.iter(app.world()).count(), 1);
 }
