@@ -13,6 +13,7 @@ pub mod headless;
 pub mod kiosk;
 pub mod performer;
 pub mod sensors;
+pub mod thumbnail;
 pub mod timing;
 
 use std::{path::PathBuf, sync::Arc, time::Duration};

@@ -297,7 +297,9 @@ pub(super) fn pelvis_world(motion: &AvatarMotion, avatar: &Transform) -> Option<
 /// a little above, looking at their middle (between them and their twin, when it is there).
 fn framing(pelvis: Vec3, twin: Option<&TwinAvatar>) -> Transform {
     let beside = twin.map_or(Vec3::ZERO, |t| 0.5 * t.offset);
-    let focus = Vec3::new(pelvis.x + beside.x, 0.95, pelvis.z + beside.z);
+    // Below the middle of the body: the person stands in the upper part of the screen,
+    // clear of the try-on panel at the bottom.
+    let focus = Vec3::new(pelvis.x + beside.x, 0.8, pelvis.z + beside.z);
     Transform::from_translation(focus + Vec3::new(0.0, 0.25, 3.4)).looking_at(focus, Vec3::Y)
 }
 
@@ -350,5 +352,6 @@ pub mod config;
 pub mod depth_view;
 pub mod guide;
 pub mod measure;
+pub mod thumbnails;
 pub mod tryon_ui;
 pub mod ui;

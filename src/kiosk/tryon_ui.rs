@@ -18,15 +18,22 @@ use fitroom_motion::plugin::AvatarMotion;
 use super::actions::{KioskAction, TryOn, garment_sizes};
 use super::config::ActiveKioskConfig;
 use super::measure::SizeAdvice;
+use super::thumbnails::{SIDE, Thumbnails, follow_thumbnails};
 use super::{KioskState, MirrorCamera};
 
 pub struct TryOnScreenPlugin;
 
 impl Plugin for TryOnScreenPlugin {
     fn build(&self, app: &mut App) {
-        app.add_systems(
+        app.init_resource::<Thumbnails>().add_systems(
             EguiPrimaryContextPass,
-            (try_on_screen, size_labels, gesture_feedback),
+            (
+                follow_thumbnails,
+                try_on_screen,
+                size_labels,
+                gesture_feedback,
+            )
+                .chain(),
         );
     }
 }
@@ -53,6 +60,54 @@ fn garment_name(file: &str) -> String {
         .join(" ")
 }
 
+/// One garment of the carousel: its thumbnail (while it is drawn, an empty square) over its
+/// name; the one shown framed, the one worn named in the accent colour. True when clicked.
+fn carousel_item(
+    ui: &mut egui::Ui,
+    name: &str,
+    texture: Option<egui::TextureId>,
+    shown: bool,
+    worn: bool,
+) -> bool {
+    let side = SIDE as f32;
+    let stroke = if shown {
+        egui::Stroke::new(3.0, ACCENT)
+    } else {
+        egui::Stroke::new(1.0, egui::Color32::from_gray(90))
+    };
+    let frame = egui::Frame::new()
+        .stroke(stroke)
+        .corner_radius(6.0)
+        .inner_margin(4.0)
+        .fill(if shown {
+            egui::Color32::from_gray(60)
+        } else {
+            egui::Color32::from_gray(40)
+        });
+    let response = frame
+        .show(ui, |ui| {
+            let size = egui::vec2(side + 32.0, side + MEDIUM + 8.0);
+            ui.allocate_ui_with_layout(size, egui::Layout::top_down(egui::Align::Center), |ui| {
+                ui.set_min_size(size);
+                match texture {
+                    Some(texture) => {
+                        ui.image((texture, egui::vec2(side, side)));
+                    }
+                    None => {
+                        ui.allocate_exact_size(egui::vec2(side, side), egui::Sense::hover());
+                    }
+                }
+                let mut text = egui::RichText::new(name).size(MEDIUM);
+                if worn {
+                    text = text.color(ACCENT);
+                }
+                ui.label(text);
+            });
+        })
+        .response;
+    response.interact(egui::Sense::click()).clicked()
+}
+
 // A Bevy system: each parameter is a resource the screen shows.
 #[allow(clippy::too_many_arguments)]
 fn try_on_screen(
@@ -65,6 +120,7 @@ fn try_on_screen(
     garments: Res<Assets<GarmentAsset>>,
     advice: Res<SizeAdvice>,
     cloth: Res<ClothSettings>,
+    thumbnails: Res<Thumbnails>,
     mut actions: MessageWriter<KioskAction>,
 ) -> Result {
     let ctx = contexts.ctx_mut()?;
@@ -100,13 +156,13 @@ fn try_on_screen(
                                 actions.write(KioskAction::Previous);
                             }
                             for (i, entry) in entries.iter().enumerate() {
-                                let mut text = egui::RichText::new(garment_name(&entry.file))
-                                    .size(if i == tryon.shown { BIG } else { MEDIUM });
-                                if tryon.worn == Some(i) {
-                                    text = text.color(ACCENT);
-                                }
-                                let button = egui::Button::new(text).selected(i == tryon.shown);
-                                if ui.add(button).clicked() {
+                                if carousel_item(
+                                    ui,
+                                    &garment_name(&entry.file),
+                                    thumbnails.texture(i),
+                                    i == tryon.shown,
+                                    tryon.worn == Some(i),
+                                ) {
                                     tryon.shown = i;
                                     actions.write(KioskAction::Select);
                                 }

@@ -356,10 +356,10 @@ pub fn strain_colour(strain_pct: f32) -> [f32; 4] {
 }
 
 /// A garment built and ready to simulate: its mesh, its simulation, and the skin it covers.
-type Built = (crate::GarmentMesh, GarmentSim, Option<Vec<bool>>);
+pub type Built = (crate::GarmentMesh, GarmentSim, Option<Vec<bool>>);
 
 /// Builds `source` in `size` on the body, its simulation ready to step.
-fn build_garment(
+pub fn build_garment(
     source: &crate::source::GarmentSource,
     body: &AvatarBody,
     size: Option<&str>,
