@@ -7,6 +7,7 @@ use bevy_egui::{EguiContexts, EguiPlugin, EguiPrimaryContextPass, egui};
 use fitroom_garment::plugin::GarmentStatus;
 use fitroom_measure::calibration::Collecting;
 use fitroom_measure::plugin::{BodyMeasurements, Calibration, CalibrationStatus};
+use fitroom_motion::filter::RejectReason;
 use fitroom_motion::plugin::AvatarMotion;
 use fitroom_sensor::plugin::SensorFeed;
 
@@ -71,7 +72,18 @@ fn status_overlay(
                     if let Some(c) = motion.pipeline.retargeter().calibration() {
                         ui.label(format!("avatar/person leg ratio {:.2}", c.scale));
                     }
-                    let rejected = motion.pipeline.gate.stats().rejected_total();
+                    // Frames without a person (no hip, an empty skeleton) are an empty room,
+                    // not bad data.
+                    let rejected: u64 = motion
+                        .pipeline
+                        .gate
+                        .stats()
+                        .by_reason()
+                        .filter(|(r, _)| {
+                            !matches!(r, RejectReason::MissingHip | RejectReason::AllAtOrigin)
+                        })
+                        .map(|(_, n)| n)
+                        .sum();
                     if rejected > 0 {
                         ui.colored_label(
                             egui::Color32::from_rgb(230, 160, 60),
