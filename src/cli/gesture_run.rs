@@ -71,7 +71,18 @@ pub fn gesture_run(dump: &Path, body: &BodyArg) -> Result<GestureRunReport> {
         seconds = frame.time_s;
         let mut out = Vec::new();
         let (mut swipe, mut click) = (None, None);
-        if let Some(tracked) = tracker.track(&frame) {
+        let tracked = tracker.track(&frame);
+        if tracked.is_none() {
+            // Nobody tracked: as in the kiosk, the reader gets a frame with no joint tracked
+            // (the tracker plugin sends one), so a gesture under way is dropped.
+            let nobody = fitroom_sensor::SensorFrame {
+                timestamp_s: frame.time_s,
+                sequence: i as u64,
+                joints: Default::default(),
+            };
+            reader.step(&nobody);
+        }
+        if let Some(tracked) = tracked {
             let skeleton = tracked.sensor_frame(frame.time_s, i as u64);
             reader.read_hands(&skeleton, Some(&frame));
             for (k, side) in [HandSide::Left, HandSide::Right].into_iter().enumerate() {

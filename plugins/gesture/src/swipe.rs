@@ -64,6 +64,10 @@ pub struct SwipeSettings {
     /// within this time (a wave swings to and fro; a swipe ends and the hand drops or rests).
     pub confirm_s: f32,
     pub wave_back: f32,
+    /// Faster than a hand moves (shoulder widths per second; a quick swipe peaks near 14):
+    /// a stroke whose hand jumps this fast before it is confirmed is the tracker losing the
+    /// hand, not the hand.
+    pub max_hand_speed: f32,
 }
 
 impl Default for SwipeSettings {
@@ -83,6 +87,7 @@ impl Default for SwipeSettings {
             return_s: 1.2,
             confirm_s: 0.3,
             wave_back: 0.5,
+            max_hand_speed: 25.0,
         }
     }
 }
@@ -103,8 +108,69 @@ pub struct SwipeDetector {
     hips: VecDeque<(f64, Vec3, Vec3)>,
     last: Option<Swipe>,
     /// A stroke waiting [`SwipeSettings::confirm_s`] for the hand not to swing back (a
-    /// wave), with where the stroke ended (sideways, shoulder widths).
-    pending: Option<(Swipe, f32)>,
+    /// wave) nor to carry on downwards (an arm dropping out to the side), nor to jump (the
+    /// tracker losing the hand).
+    pending: Option<Pending>,
+}
+
+/// A stroke found, followed until it is confirmed (positions in shoulder widths).
+#[derive(Clone, Copy, Debug)]
+struct Pending {
+    swipe: Swipe,
+    /// Where the stroke began and ended, sideways.
+    start_x: f32,
+    end_x: f32,
+    /// The farthest the hand has gone in the stroke's direction since, sideways, and the
+    /// vertical range of the movement up to there.
+    farthest_x: f32,
+    low: f32,
+    high: f32,
+    /// The vertical range since the farthest point (it joins the movement's if the hand goes
+    /// farther still).
+    since_low: f32,
+    since_high: f32,
+    /// The hand's last position and time, and its fastest move since, shoulder widths/s.
+    last: (f64, Vec2),
+    fastest: f32,
+}
+
+impl Pending {
+    /// The stroke's direction as a sign along the sideways axis.
+    fn sign(&self) -> f32 {
+        match self.swipe.direction {
+            SwipeDirection::Right => 1.0,
+            SwipeDirection::Left => -1.0,
+        }
+    }
+
+    /// Follows the stroke's hand at `p` at time `t`.
+    fn follow(&mut self, t: f64, p: Vec2) {
+        let dt = (t - self.last.0) as f32;
+        if dt > 0.0 {
+            self.fastest = self.fastest.max(p.distance(self.last.1) / dt);
+        }
+        self.last = (t, p);
+        self.since_low = self.since_low.min(p.y);
+        self.since_high = self.since_high.max(p.y);
+        if (p.x - self.farthest_x) * self.sign() > 0.0 {
+            self.farthest_x = p.x;
+            self.low = self.low.min(self.since_low);
+            self.high = self.high.max(self.since_high);
+            self.since_low = p.y;
+            self.since_high = p.y;
+        }
+    }
+
+    /// The hand swung back this far from the stroke's end (a wave), shoulder widths.
+    fn back(&self, p: Vec2) -> f32 {
+        (self.end_x - p.x) * self.sign()
+    }
+
+    /// The whole movement in the stroke's direction, from its start to the farthest point,
+    /// is steeper than `max_slope` (the stroke was a level stretch of a diagonal sweep).
+    fn diagonal(&self, max_slope: f32) -> bool {
+        self.high - self.low > max_slope * (self.farthest_x - self.start_x).abs()
+    }
 }
 
 /// The person's frame: the shoulder centre, their right (unit, horizontal), up, forward
@@ -148,7 +214,14 @@ impl SwipeDetector {
     pub fn update(&mut self, frame: &SensorFrame) -> Option<Swipe> {
         let s = self.settings;
         let t = frame.timestamp_s;
-        let (centre, right, forward, width) = body_frame(frame)?;
+        let Some((centre, right, forward, width)) = body_frame(frame) else {
+            // The person lost mid-gesture (the tracker's frame without a skeleton): a stroke
+            // waiting to be confirmed is not (when the tracker finds them again, their hands
+            // are wherever it puts them first). A frame that never came (a Kinect drops
+            // some) is no evidence either way.
+            self.pending = None;
+            return None;
+        };
         let keep = f64::from(s.max_duration_s.max(s.walk_window_s)) + 0.1;
         let hip = frame.joint(KinectJoint::HipCenter).position;
         if hip.is_finite() {
@@ -183,36 +256,53 @@ impl SwipeDetector {
                 && reach >= s.min_reach;
             track.samples.push_back((t, p, usable));
             if found.is_none()
-                && let Some(direction) = stroke(&track.samples, &s)
+                && let Some((direction, start, low, high)) = stroke(&track.samples, &s)
             {
-                found = Some(Swipe {
+                let swipe = Swipe {
                     direction,
                     hand: side,
                     time_s: t,
+                };
+                found = Some(Pending {
+                    swipe,
+                    start_x: start,
+                    end_x: p.x,
+                    farthest_x: p.x,
+                    low,
+                    high,
+                    since_low: p.y,
+                    since_high: p.y,
+                    last: (t, p),
+                    fastest: 0.0,
                 });
             }
         }
-        // A pending stroke becomes a swipe unless its hand swings back (a wave).
+        // A pending stroke becomes a swipe unless its hand swings back (a wave), the movement
+        // it was part of carries on steeply (an arm dropping out to the side), or the hand
+        // jumps (the tracker lost it; a frame without the person, above, drops it too).
         let mut confirmed = None;
-        if let Some((swipe, end_x)) = self.pending {
-            let back = self.hands[swipe.hand.index()]
+        if let Some(mut pending) = self.pending {
+            let latest = self.hands[pending.swipe.hand.index()]
                 .samples
                 .back()
-                .map_or(0.0, |h| {
-                    let moved = h.1.x - end_x;
-                    match swipe.direction {
-                        SwipeDirection::Right => -moved,
-                        SwipeDirection::Left => moved,
-                    }
-                });
-            if back >= s.wave_back {
+                .filter(|h| h.0 > pending.last.0);
+            if let Some(&(at, p, _)) = latest {
+                pending.follow(at, p);
+            }
+            self.pending = Some(pending);
+            let back = latest.map_or(0.0, |h| pending.back(h.1));
+            if back >= s.wave_back
+                || pending.diagonal(s.max_slope)
+                || pending.fastest > s.max_hand_speed
+            {
                 self.pending = None;
-            } else if (t - swipe.time_s) as f32 >= s.confirm_s {
+            } else if (t - pending.swipe.time_s) as f32 >= s.confirm_s {
                 self.pending = None;
-                confirmed = Some(swipe);
+                confirmed = Some(pending.swipe);
             }
         }
-        if let Some(swipe) = found {
+        if let Some(stroke) = found {
+            let swipe = stroke.swipe;
             let since_last = self
                 .last
                 .map(|last| ((t - last.time_s) as f32, last.direction));
@@ -220,11 +310,7 @@ impl SwipeDetector {
                 since < s.refractory_s || (since < s.return_s && swipe.direction != direction)
             });
             if !refused && self.pending.is_none() {
-                let end_x = self.hands[swipe.hand.index()]
-                    .samples
-                    .back()
-                    .map_or(0.0, |h| h.1.x);
-                self.pending = Some((swipe, end_x));
+                self.pending = Some(stroke);
                 self.last = Some(swipe);
                 // The stroke is used up: the next swipe needs a stroke of its own.
                 for track in &mut self.hands {
@@ -260,18 +346,28 @@ impl SwipeDetector {
 
 /// A swipe direction if the samples (oldest first) end with a qualifying stroke: from some
 /// sample within the duration to the last, every sample usable, sideways travel and mean
-/// speed past the thresholds, every sample's height within the slope's band.
-fn stroke(samples: &VecDeque<(f64, Vec2, bool)>, s: &SwipeSettings) -> Option<SwipeDirection> {
+/// speed past the thresholds, every sample's height within the slope's band, no jump faster
+/// than a hand moves between samples. With it, where
+/// the stroke began sideways and its vertical range (low, high).
+fn stroke(
+    samples: &VecDeque<(f64, Vec2, bool)>,
+    s: &SwipeSettings,
+) -> Option<(SwipeDirection, f32, f32, f32)> {
     let &(t1, p1, ok1) = samples.back()?;
     if !ok1 {
         return None;
     }
     let (mut low, mut high) = (p1.y, p1.y);
+    let mut later = (t1, p1);
     for &(t0, p0, ok0) in samples.iter().rev().skip(1) {
         let dt = (t1 - t0) as f32;
-        if dt > s.max_duration_s || !ok0 {
+        // A jump faster than a hand moves is the tracker's: no stroke spans it.
+        let step_s = (later.0 - t0) as f32;
+        let jumped = step_s > 0.0 && later.1.distance(p0) / step_s > s.max_hand_speed;
+        if dt > s.max_duration_s || !ok0 || jumped {
             break;
         }
+        later = (t0, p0);
         low = low.min(p0.y);
         high = high.max(p0.y);
         let travel = p1 - p0;
@@ -279,11 +375,12 @@ fn stroke(samples: &VecDeque<(f64, Vec2, bool)>, s: &SwipeSettings) -> Option<Sw
             && travel.x.abs() / dt >= s.min_speed
             && high - low <= s.max_slope * travel.x.abs()
         {
-            return Some(if travel.x > 0.0 {
+            let direction = if travel.x > 0.0 {
                 SwipeDirection::Right
             } else {
                 SwipeDirection::Left
-            });
+            };
+            return Some((direction, p0.x, low, high));
         }
     }
     None

@@ -78,8 +78,8 @@ fn broken_skeletons_make_no_swipe() {
 }
 
 /// A person 2 m away facing the sensor, the right hand at `x` (the person's right, metres from
-/// the shoulder centre), level with the shoulders and 0.3 m in front; confidence `seen`.
-fn raised(t: f64, x: f32, seen: f32) -> SensorFrame {
+/// the shoulder centre) and `y` (up from the shoulders), 0.3 m in front; confidence `seen`.
+fn raised(t: f64, (x, y): (f32, f32), seen: f32) -> SensorFrame {
     let centre = Vec3::new(0.0, 0.5, 2.0);
     let mut f = SensorFrame {
         timestamp_s: t,
@@ -96,25 +96,60 @@ fn raised(t: f64, x: f32, seen: f32) -> SensorFrame {
     f.joints[KinectJoint::ShoulderRight.index()].position = centre + Vec3::X * 0.18;
     f.joints[KinectJoint::HandLeft.index()].position = centre + Vec3::new(-0.2, -0.7, 0.0);
     let hand = &mut f.joints[KinectJoint::HandRight.index()];
-    hand.position = centre + Vec3::new(x, 0.0, -0.3);
+    hand.position = centre + Vec3::new(x, y, -0.3);
     hand.confidence = seen;
     f
 }
 
-/// Sweeps the right hand from -0.2 to 0.4 m in 0.3 s, then holds or swings back (a wave),
-/// with the hand seen or only inferred; the swipes found.
-fn sweep(back: bool, seen: f32) -> Vec<SwipeDirection> {
+/// What the hand does after its stroke.
+#[derive(Clone, Copy)]
+enum After {
+    Holds,
+    /// Swings straight back (a wave).
+    SwingsBack,
+    /// Carries on 0.2 m sideways while dropping 0.6 m in 0.2 s (an arm falling out to the
+    /// side: the whole movement is steeper than a swipe's, its first part level).
+    DropsOutwards,
+    /// Jumps 0.5 m on and down in a frame (the tracker losing the hand, as in the CMU kick).
+    Jumps,
+    /// Holds, but the tracker loses the person for a frame (a frame with no joint tracked,
+    /// as the tracker plugin sends), as in the CMU kick with another camera seed.
+    Lost,
+    /// Holds, and a frame never comes (a Kinect drops some): still a swipe.
+    Dropped,
+}
+
+/// Sweeps the right hand level from -0.2 to 0.4 m in 0.3 s, then `after`, with the hand seen
+/// or only inferred; the swipes found.
+fn sweep(after: After, seen: f32) -> Vec<SwipeDirection> {
     let mut d = SwipeDetector::default();
     let mut found = Vec::new();
     for k in 0..60 {
         let t = k as f64 / 30.0;
-        let x = match k {
-            0..10 => -0.2,
-            10..19 => -0.2 + 0.6 * (k - 10) as f32 / 9.0,
-            _ if back => (0.4 - 0.6 * (k - 19) as f32 / 9.0).max(-0.2),
-            _ => 0.4,
+        let since = (k as f32 - 19.0) / 9.0;
+        let at = match (k, after) {
+            (0..10, _) => (-0.2, 0.0),
+            (10..19, _) => (-0.2 + 0.6 * (k - 10) as f32 / 9.0, 0.0),
+            (_, After::Holds) => (0.4, 0.0),
+            (_, After::SwingsBack) => ((0.4 - 0.6 * since).max(-0.2), 0.0),
+            (_, After::DropsOutwards) => {
+                let f = (1.5 * since).min(1.0);
+                (0.4 + 0.2 * f, -0.6 * f)
+            }
+            (19..21, After::Jumps) => (0.4, 0.0),
+            (_, After::Jumps) => (0.7, -0.4),
+            (21, After::Lost) => {
+                let mut nobody = raised(t, (0.4, 0.0), 1.0);
+                nobody.joints = Default::default();
+                if let Some(s) = d.update(&nobody) {
+                    found.push(s.direction);
+                }
+                continue;
+            }
+            (21, After::Dropped) => continue,
+            (_, After::Lost | After::Dropped) => (0.4, 0.0),
         };
-        if let Some(s) = d.update(&raised(t, x, seen)) {
+        if let Some(s) = d.update(&raised(t, at, seen)) {
             found.push(s.direction);
         }
     }
@@ -122,10 +157,16 @@ fn sweep(back: bool, seen: f32) -> Vec<SwipeDirection> {
 }
 
 /// A sweep that ends is a swipe; the same sweep swung straight back is a wave, no swipe; a
-/// sweep of a hand the tracker only infers is none either.
+/// sweep of a hand the tracker only infers is none either; nor a level stretch of an arm
+/// falling out to the side (the CMU wave's end), nor a sweep whose hand then jumps or goes
+/// unseen (the tracker losing an arm swung in the CMU kick, or the person).
 #[test]
 fn a_sweep_is_a_swipe_a_wave_is_not() {
-    assert_eq!(sweep(false, 1.0), [SwipeDirection::Right]);
-    assert_eq!(sweep(true, 1.0), []);
-    assert_eq!(sweep(false, 0.5), []);
+    assert_eq!(sweep(After::Holds, 1.0), [SwipeDirection::Right]);
+    assert_eq!(sweep(After::SwingsBack, 1.0), []);
+    assert_eq!(sweep(After::Holds, 0.5), []);
+    assert_eq!(sweep(After::DropsOutwards, 1.0), []);
+    assert_eq!(sweep(After::Jumps, 1.0), []);
+    assert_eq!(sweep(After::Lost, 1.0), []);
+    assert_eq!(sweep(After::Dropped, 1.0), [SwipeDirection::Right]);
 }
