@@ -314,8 +314,8 @@ fn size_labels(
     Ok(())
 }
 
-/// The hand cursor (a ring, filled as the hand grips) and, for half a second after a swipe,
-/// its arrow.
+/// The hand cursor (a ring, a disc growing inside it as the hand closes, filled when it
+/// grips) and, for half a second after a swipe, its arrow.
 fn gesture_feedback(
     mut contexts: EguiContexts,
     gestures: Option<Res<Gestures>>,
@@ -340,6 +340,15 @@ fn gesture_feedback(
         painter.circle_stroke(at, 28.0, egui::Stroke::new(5.0, colour));
         if cursor.pressed {
             painter.circle_filled(at, 22.0, colour);
+        } else {
+            // The grip's fill: the disc grows as the hand reads more closed (its probability
+            // of open from 0.8 down to 0.2), so a person sees the grip coming.
+            let closed = 1.0 - gestures.p_open[cursor.hand.index()];
+            let fill = ((closed - 0.2) / 0.6).clamp(0.0, 1.0);
+            if fill > 0.0 {
+                let faint = egui::Color32::from_rgba_unmultiplied(240, 190, 90, 120);
+                painter.circle_filled(at, 22.0 * fill, faint);
+            }
         }
     }
     let now = feed.latest.as_ref().map(|f| f.timestamp_s);
