@@ -66,9 +66,11 @@ fn world_to_sensor(placement: &SensorPlacement) -> Affine3A {
 /// The avatar's skin and its garment, sensor space (`None` before the body is loaded).
 pub fn avatar_meshes(world: &mut World) -> Option<Vec<SceneMesh>> {
     let to_sensor = world_to_sensor(world.get_resource::<SensorPlacement>()?);
-    let body = world.get_resource::<AvatarBody>()?.clone();
+    // The query's state first (it needs the world mutably), then shared borrows only: the
+    // body is read in place, not copied every frame.
     let mut joints = world.query::<(&AvatarJoint, &GlobalTransform)>();
-    let skin = world_skin(&body, joints.iter(world));
+    let body = world.get_resource::<AvatarBody>()?;
+    let skin = world_skin(body, joints.iter(world));
     let mut meshes = vec![SceneMesh {
         positions: skin
             .iter()

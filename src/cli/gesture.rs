@@ -137,23 +137,27 @@ pub struct HandReport {
     pub false_swipes_per_10_min: f64,
 }
 
-fn film(body: &BodyArg, sampling: &Sampling, threads: usize, what: &str) -> Result<Vec<Sample>> {
-    let model = body.load()?;
+fn film(
+    model: &fitroom_body::BodyModel,
+    sampling: &Sampling,
+    threads: usize,
+    what: &str,
+) -> Result<Vec<Sample>> {
     let bar = indicatif::ProgressBar::new(sampling.count as u64);
     bar.set_style(
         indicatif::ProgressStyle::with_template("{msg} [{bar:40}] {pos}/{len} ({eta})")
             .unwrap_or_else(|_| indicatif::ProgressStyle::default_bar()),
     );
     bar.set_message(what.to_owned());
-    let samples = film_samples(&model, sampling, threads, &|n| bar.set_position(n as u64))
+    let samples = film_samples(model, sampling, threads, &|n| bar.set_position(n as u64))
         .context("filming synthetic hands")?;
     bar.finish_and_clear();
     Ok(samples)
 }
 
-fn trained(body: &BodyArg, args: &SamplingArgs) -> Result<HandModel> {
+fn trained(model: &fitroom_body::BodyModel, args: &SamplingArgs) -> Result<HandModel> {
     let sampling = args.sampling(0)?;
-    let samples = film(body, &sampling, args.threads, "training hands")?;
+    let samples = film(model, &sampling, args.threads, "training hands")?;
     let examples: Vec<_> = samples.iter().map(|s| s.example).collect();
     Ok(train(
         &examples,
@@ -232,7 +236,7 @@ pub fn run(command: GestureCommand) -> Result<()> {
             out,
             body,
         } => {
-            let model = trained(&body, &sampling)?;
+            let model = trained(&body.load()?, &sampling)?;
             let text = ron::ser::to_string_pretty(&model, ron::ser::PrettyConfig::default())?;
             std::fs::write(&out, text + "\n")
                 .with_context(|| format!("cannot write '{}'", out.display()))?;
@@ -253,6 +257,8 @@ pub fn run(command: GestureCommand) -> Result<()> {
             if repeats == 0 {
                 bail!("--repeats 0: at least 1");
             }
+            // The body, once: the hands, the training and the scripted swipes all film it.
+            let body = body.load()?;
             let hand_model = match (model, train) {
                 (Some(_), true) => bail!("--model and --train: give one"),
                 (Some(path), false) => {
@@ -268,7 +274,7 @@ pub fn run(command: GestureCommand) -> Result<()> {
             let bands = score(&hand_model, &samples, &[1.0, 1.5, 2.0, 2.5, 3.0, 3.5]);
             let (ours, seed) = pooled(&bands, 1.0, 2.5);
             let settings = SwipeSettings::default();
-            let recall = swipe_recall(&body.load()?, settings, swipes, TEST_SEEDS)
+            let recall = swipe_recall(&body, settings, swipes, TEST_SEEDS)
                 .context("scripting swipes")?;
             let mut per_clip = Vec::new();
             for file in &clip_files {
