@@ -274,8 +274,8 @@ pub fn run(command: GestureCommand) -> Result<()> {
             let bands = score(&hand_model, &samples, &[1.0, 1.5, 2.0, 2.5, 3.0, 3.5]);
             let (ours, seed) = pooled(&bands, 1.0, 2.5);
             let settings = SwipeSettings::default();
-            let recall = swipe_recall(&body, settings, swipes, TEST_SEEDS)
-                .context("scripting swipes")?;
+            let recall =
+                swipe_recall(&body, settings, swipes, TEST_SEEDS).context("scripting swipes")?;
             let mut per_clip = Vec::new();
             for file in &clip_files {
                 per_clip.push(

@@ -6,8 +6,9 @@
 //! `Select` dresses the avatar in the garment shown, `Back` returns the carousel to the one
 //! worn, `SizeUp` / `SizeDown` step through the garment's sizes, `ToggleFitMap` colours the
 //! garment by its strain, `Compare` shows the avatar's twin beside it in the next size
-//! ([`super::compare`]), `Photo` saves a PNG of the screen. In `TryOn` an avatar that wears
-//! nothing wears the carousel's garment (the configuration's first).
+//! ([`super::compare`]), `Photo` saves a PNG of the screen. An avatar that wears nothing
+//! wears the carousel's garment (the configuration's first), from the start: the mirror in
+//! `Attract` shows a dressed mannequin, not a bare one.
 
 use std::path::PathBuf;
 
@@ -95,7 +96,7 @@ pub fn add(app: &mut App) {
         .add_systems(
             PostUpdate,
             (
-                dress_in_try_on,
+                dress_when_bare,
                 apply_actions,
                 super::compare::follow_compare,
             )
@@ -192,15 +193,14 @@ fn garment_request(config: &ActiveKioskConfig, index: usize) -> Option<GarmentRe
     })
 }
 
-/// In `TryOn`, an avatar that wears nothing (and never did here) wears the carousel's
-/// garment.
-fn dress_in_try_on(
-    state: Res<State<KioskState>>,
+/// An avatar that wears nothing (and never did here) wears the carousel's garment, in any
+/// state (the first visitor meets a dressed mannequin, as every later one does).
+fn dress_when_bare(
     config: Res<ActiveKioskConfig>,
     mut tryon: ResMut<TryOn>,
     mut request: ResMut<GarmentRequest>,
 ) {
-    if *state.get() != KioskState::TryOn || request.path.is_some() || tryon.worn.is_some() {
+    if request.path.is_some() || tryon.worn.is_some() {
         return;
     }
     if let Some(r) = garment_request(&config, tryon.shown) {
