@@ -246,11 +246,6 @@ fn sizes_worn(app: &App) -> Vec<String> {
         .collect()
 }
 
-/// The size in a `name size` status text.
-fn size_of(worn: Option<&String>) -> Option<String> {
-    worn.and_then(|w| w.rsplit(' ').next()).map(str::to_owned)
-}
-
 #[test]
 fn compare_puts_a_twin_beside_the_avatar_in_the_next_size() {
     let mut app = app();
@@ -261,10 +256,10 @@ fn compare_puts_a_twin_beside_the_avatar_in_the_next_size() {
         state(app) == KioskState::TryOn && app.world().resource::<GarmentStatus>().worn.is_some()
     });
     let sizes = sizes_worn(&app);
-    let worn_at = |app: &App| {
-        let worn = size_of(app.world().resource::<GarmentStatus>().worn.as_ref());
-        sizes.iter().position(|s| Some(s) == worn.as_ref())
-    };
+    let status = |app: &App| app.world().resource::<GarmentStatus>().clone();
+    // Where a size is in the chart (the avatar's, or the twin's).
+    let at = |size: Option<&str>| sizes.iter().position(|s| Some(s.as_str()) == size);
+    let worn_at = |app: &App| at(status(app).worn_size());
     let first = worn_at(&app).expect("a size of the chart");
     assert!(
         first + 1 < sizes.len(),
@@ -273,18 +268,11 @@ fn compare_puts_a_twin_beside_the_avatar_in_the_next_size() {
 
     tap(&mut app, KeyCode::KeyV);
     update_until(&mut app, "the twin dressed", |app| {
-        app.world()
-            .resource::<GarmentStatus>()
-            .compare_worn
-            .is_some()
+        status(app).compare_worn.is_some()
     });
-    let status = app.world().resource::<GarmentStatus>().clone();
-    assert_eq!(
-        size_of(status.compare_worn.as_ref()),
-        Some(sizes[first + 1].clone()),
-        "{status:?}"
-    );
-    assert_eq!(status.error, None);
+    let dressed = status(&app);
+    assert_eq!(at(dressed.compare_size()), Some(first + 1), "{dressed:?}");
+    assert_eq!(dressed.error, None);
     // Two simulations, one the twin's; the twin's joints are the avatar's, moved beside it.
     app.update();
     let mut garments = app
@@ -300,16 +288,16 @@ fn compare_puts_a_twin_beside_the_avatar_in_the_next_size() {
     let mut avatar = app
         .world_mut()
         .query::<(&fitroom_body::plugin::AvatarJoint, &GlobalTransform)>();
-    let mut at = std::collections::HashMap::new();
+    let mut bones = std::collections::HashMap::new();
     for (joint, global) in avatar.iter(app.world()) {
-        at.insert(joint.0, global.translation());
+        bones.insert(joint.0, global.translation());
     }
     let mut twin = app
         .world_mut()
         .query::<(&fitroom_body::twin::TwinJoint, &GlobalTransform)>();
     let mut followed = 0;
     for (joint, global) in twin.iter(app.world()) {
-        let expected = at[&joint.0] + offset;
+        let expected = bones[&joint.0] + offset;
         assert!(
             global.translation().distance(expected) < 1e-4,
             "bone {}: {} vs {expected}",
@@ -318,38 +306,22 @@ fn compare_puts_a_twin_beside_the_avatar_in_the_next_size() {
         );
         followed += 1;
     }
-    assert_eq!(followed, at.len());
+    assert_eq!(followed, bones.len());
     // A size up moves both along.
     tap(&mut app, KeyCode::ArrowUp);
     update_until(&mut app, "both re-dressed", |app| {
-        worn_at(app) == Some(first + 1)
-            && app
-                .world()
-                .resource::<GarmentStatus>()
-                .compare_worn
-                .is_some()
+        worn_at(app) == Some(first + 1) && status(app).compare_worn.is_some()
     });
     let expected = if first + 2 < sizes.len() {
         first + 2
     } else {
         first
     };
-    assert_eq!(
-        size_of(
-            app.world()
-                .resource::<GarmentStatus>()
-                .compare_worn
-                .as_ref()
-        ),
-        Some(sizes[expected].clone())
-    );
+    assert_eq!(at(status(&app).compare_size()), Some(expected));
     // Compare again: one avatar, one garment.
     tap(&mut app, KeyCode::KeyV);
     update_until(&mut app, "the twin gone", |app| {
-        app.world()
-            .resource::<GarmentStatus>()
-            .compare_worn
-            .is_none()
+        status(app).compare_worn.is_none()
     });
     app.update();
     assert!(

@@ -75,12 +75,7 @@ pub fn gesture_run(dump: &Path, body: &BodyArg) -> Result<GestureRunReport> {
         if tracked.is_none() {
             // Nobody tracked: as in the kiosk, the reader gets a frame with no joint tracked
             // (the tracker plugin sends one), so a gesture under way is dropped.
-            let nobody = fitroom_sensor::SensorFrame {
-                timestamp_s: frame.time_s,
-                sequence: i as u64,
-                joints: Default::default(),
-            };
-            reader.step(&nobody);
+            reader.step(&fitroom_sensor::SensorFrame::nobody(frame.time_s, i as u64));
         }
         if let Some(tracked) = tracked {
             let skeleton = tracked.sensor_frame(frame.time_s, i as u64);

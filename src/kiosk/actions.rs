@@ -244,11 +244,7 @@ fn apply_actions(
             }
             KioskAction::SizeUp | KioskAction::SizeDown => {
                 let sizes = garment_sizes(&status, &garments);
-                let now = request
-                    .size
-                    .as_ref()
-                    .or(status_size(&status).as_ref())
-                    .cloned();
+                let now = size_worn(&request, &status);
                 let at = now.and_then(|s| sizes.iter().position(|x| *x == s));
                 let next = match (action, at) {
                     (KioskAction::SizeUp, Some(i)) => (i + 1).min(sizes.len().saturating_sub(1)),
@@ -286,13 +282,13 @@ fn apply_actions(
     }
 }
 
-/// The size worn, from the status's `name size` text.
-pub(super) fn status_size(status: &GarmentStatus) -> Option<String> {
-    status
-        .worn
-        .as_ref()
-        .and_then(|w| w.rsplit(' ').next())
-        .map(str::to_owned)
+/// The size the avatar wears or is about to: the one requested, or the one worn (the
+/// garment's middle size when none was requested).
+pub(super) fn size_worn(request: &GarmentRequest, status: &GarmentStatus) -> Option<String> {
+    request
+        .size
+        .clone()
+        .or_else(|| status.worn_size().map(str::to_owned))
 }
 
 /// The labels of the worn garment's sizes, smallest first (none before it is loaded).

@@ -9,7 +9,7 @@ use fitroom_garment::asset::GarmentAsset;
 use fitroom_garment::plugin::{GarmentRequest, GarmentStatus};
 
 use super::KioskState;
-use super::actions::{TryOn, garment_sizes, status_size};
+use super::actions::{TryOn, garment_sizes, size_worn};
 
 /// Where the twin stands: beside the avatar (world +x; on the screen's left in the mirror),
 /// far enough apart that the widest dress does not touch.
@@ -44,8 +44,7 @@ pub(super) fn follow_compare(
     }
     let wanted = if tryon.compare && request.path.is_some() {
         let sizes = garment_sizes(&status, &garments);
-        let worn = request.size.clone().or_else(|| status_size(&status));
-        worn.and_then(|w| neighbour_size(&sizes, &w))
+        size_worn(&request, &status).and_then(|w| neighbour_size(&sizes, &w))
     } else {
         None
     };

@@ -68,29 +68,32 @@ pub(super) fn follow_thumbnails(
     let (Some(root), Some(body)) = (root, body) else {
         return;
     };
-    let files: Vec<PathBuf> = config
-        .config
-        .garments
-        .iter()
-        .map(|g| config.folder.join(&g.file))
-        .collect();
-    if thumbnails.entries.iter().map(|e| &e.file).ne(files.iter()) {
-        for entry in &thumbnails.entries {
-            if let State::Ready(_, image) = &entry.state {
-                contexts.remove_image(image);
-            }
-        }
-        thumbnails.entries = files
-            .into_iter()
-            .map(|file| Entry {
-                handle: garment_asset_path(&root.0, &file)
-                    .map(|path| server.load(path))
-                    .inspect_err(|e| warn!("no thumbnail: {e}"))
-                    .ok(),
-                file,
-                state: State::Waiting,
-            })
+    // The list is looked at when the configuration changed (an edit) or none is kept yet.
+    if config.is_changed() || thumbnails.entries.is_empty() {
+        let files: Vec<PathBuf> = config
+            .config
+            .garments
+            .iter()
+            .map(|g| config.folder.join(&g.file))
             .collect();
+        if thumbnails.entries.iter().map(|e| &e.file).ne(files.iter()) {
+            for entry in &thumbnails.entries {
+                if let State::Ready(_, image) = &entry.state {
+                    contexts.remove_image(image);
+                }
+            }
+            thumbnails.entries = files
+                .into_iter()
+                .map(|file| Entry {
+                    handle: garment_asset_path(&root.0, &file)
+                        .map(|path| server.load(path))
+                        .inspect_err(|e| warn!("no thumbnail: {e}"))
+                        .ok(),
+                    file,
+                    state: State::Waiting,
+                })
+                .collect();
+        }
     }
     for event in events.read() {
         if let AssetEvent::Modified { id } = event {

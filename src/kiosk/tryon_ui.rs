@@ -15,7 +15,7 @@ use fitroom_body::plugin::Avatar;
 use fitroom_body::twin::TwinAvatar;
 use fitroom_motion::plugin::AvatarMotion;
 
-use super::actions::{KioskAction, TryOn, garment_sizes};
+use super::actions::{KioskAction, TryOn, garment_sizes, size_worn};
 use super::config::ActiveKioskConfig;
 use super::measure::SizeAdvice;
 use super::thumbnails::{SIDE, Thumbnails, follow_thumbnails};
@@ -176,12 +176,7 @@ fn try_on_screen(
                         if !sizes.is_empty() {
                             ui.horizontal(|ui| {
                                 ui.label(egui::RichText::new("Size").size(MEDIUM));
-                                let worn = request.size.clone().or_else(|| {
-                                    status
-                                        .worn
-                                        .as_ref()
-                                        .and_then(|w| w.rsplit(' ').next().map(str::to_owned))
-                                });
+                                let worn = size_worn(&request, &status);
                                 for size in &sizes {
                                     let recommended = advice.size.as_ref() == Some(size);
                                     let label = if recommended {
@@ -269,7 +264,7 @@ fn size_labels(
     avatar: Query<&Transform, With<Avatar>>,
     camera: Query<(&Camera, &GlobalTransform), With<MirrorCamera>>,
 ) -> Result {
-    let (Some(twin), Some(motion), Some(compared)) = (twin, motion, &status.compare_worn) else {
+    let (Some(twin), Some(motion), Some(compared)) = (twin, motion, status.compare_size()) else {
         return Ok(());
     };
     let (Ok(avatar), Ok((camera, view))) = (avatar.single(), camera.single()) else {
@@ -285,14 +280,13 @@ fn size_labels(
     ));
     // Above the heads: the pelvis is about half the body's height up.
     let above = Vec3::new(0.0, 0.95 * pelvis.y.max(0.5), 0.0);
-    for (at, worn) in [
-        (pelvis, status.worn.as_deref()),
-        (pelvis + twin.offset, Some(compared.as_str())),
+    for (at, size) in [
+        (pelvis, status.worn_size()),
+        (pelvis + twin.offset, Some(compared)),
     ] {
-        let (Some(worn), Ok(point)) = (worn, camera.world_to_viewport(view, at + above)) else {
+        let (Some(size), Ok(point)) = (size, camera.world_to_viewport(view, at + above)) else {
             continue;
         };
-        let size = worn.rsplit(' ').next().unwrap_or(worn);
         let recommended = advice.size.as_deref() == Some(size);
         let text = if recommended {
             format!("{size} ★")

@@ -127,7 +127,7 @@ fn spawn_or_despawn_twin(
 
 /// The twin takes the avatar's pose (its joints' local transforms, its root's placement) and
 /// the avatar's mesh and bind poses when they were replaced (a reshaped body).
-#[allow(clippy::type_complexity)]
+#[allow(clippy::type_complexity, clippy::too_many_arguments)]
 fn follow_avatar(
     twin: Option<Res<TwinAvatar>>,
     avatar: Query<&Transform, (With<Avatar>, Without<TwinRoot>, Without<TwinJoint>)>,
@@ -136,6 +136,7 @@ fn follow_avatar(
     mut twin_joints: Query<(&TwinJoint, &mut Transform), (Without<AvatarJoint>, Without<TwinRoot>)>,
     skin: Query<(&Mesh3d, &SkinnedMesh), (With<AvatarSkin>, Without<TwinSkin>)>,
     mut twin_skin: Query<(&mut Mesh3d, &mut SkinnedMesh), (With<TwinSkin>, Without<AvatarSkin>)>,
+    mut local: Local<Vec<Option<Transform>>>,
 ) {
     let Some(twin) = twin else {
         return;
@@ -143,7 +144,8 @@ fn follow_avatar(
     if let (Ok(avatar), Ok(mut root)) = (avatar.single(), root.single_mut()) {
         *root = avatar.with_translation(avatar.translation + twin.offset);
     }
-    let mut local = Vec::new();
+    // The avatar's local transforms by bone (the buffer kept from frame to frame).
+    local.clear();
     for (joint, transform) in &joints {
         if local.len() <= joint.0 {
             local.resize(joint.0 + 1, None);

@@ -110,6 +110,24 @@ pub struct GarmentStatus {
     pub max_strain_pct: f32,
 }
 
+impl GarmentStatus {
+    /// The size the avatar wears (the last word of [`Self::worn`]: sizes have no spaces,
+    /// names may).
+    pub fn worn_size(&self) -> Option<&str> {
+        self.worn.as_deref().and_then(size_in)
+    }
+
+    /// The size the twin wears.
+    pub fn compare_size(&self) -> Option<&str> {
+        self.compare_worn.as_deref().and_then(size_in)
+    }
+}
+
+/// The size in a `name size` status text.
+fn size_in(worn: &str) -> Option<&str> {
+    worn.rsplit(' ').next()
+}
+
 /// The simulated garment entity.
 #[derive(Component)]
 pub struct WornGarment {
@@ -438,8 +456,13 @@ fn dress_avatar(
     let built = build_garment(source, &body, request.size.as_deref(), &settings);
     // The twin's size failing (one this garment does not have) leaves the twin bare, not the
     // avatar.
+    // The skin left out is the avatar's garment's: the twin's is not computed.
+    let twin_settings = ClothSettings {
+        hide_covered_skin: false,
+        ..settings.clone()
+    };
     let (compared, compare_error) = match request.compare.as_deref() {
-        Some(size) => match build_garment(source, &body, Some(size), &settings) {
+        Some(size) => match build_garment(source, &body, Some(size), &twin_settings) {
             Ok(b) => (Some(b), None),
             Err(e) => (None, Some(format!("the twin's size {size}: {e}"))),
         },

@@ -139,9 +139,7 @@ fn sweep(after: After, seen: f32) -> Vec<SwipeDirection> {
             (19..21, After::Jumps) => (0.4, 0.0),
             (_, After::Jumps) => (0.7, -0.4),
             (21, After::Lost) => {
-                let mut nobody = raised(t, (0.4, 0.0), 1.0);
-                nobody.joints = Default::default();
-                if let Some(s) = d.update(&nobody) {
+                if let Some(s) = d.update(&SensorFrame::nobody(t, k)) {
                     found.push(s.direction);
                 }
                 continue;

@@ -165,6 +165,16 @@ pub struct SensorFrame {
 }
 
 impl SensorFrame {
+    /// A frame in which nobody is tracked (every joint's confidence 0): what a depth tracker
+    /// sends when it finds no one, so that what follows sees the gap.
+    pub fn nobody(timestamp_s: f64, sequence: u64) -> SensorFrame {
+        SensorFrame {
+            timestamp_s,
+            sequence,
+            joints: Default::default(),
+        }
+    }
+
     pub fn joint(&self, joint: KinectJoint) -> &JointSample {
         &self.joints[joint.index()]
     }

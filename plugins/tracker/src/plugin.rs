@@ -127,11 +127,7 @@ fn track(
         let sequence = active.sequence;
         let out = match &tracked {
             Some(t) => t.sensor_frame(time_s, sequence),
-            None => SensorFrame {
-                timestamp_s: time_s,
-                sequence,
-                joints: Default::default(),
-            },
+            None => SensorFrame::nobody(time_s, sequence),
         };
         active.sequence += 1;
         sensor.frames_received += 1;
