@@ -23,6 +23,7 @@ pub mod raster;
 mod readings;
 mod spans;
 mod still;
+mod tables;
 
 use std::sync::Arc;
 

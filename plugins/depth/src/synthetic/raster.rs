@@ -1,11 +1,12 @@
 //! A CPU z-buffer rasteriser for triangle meshes in sensor space, seen by the depth camera.
 //!
-//! Inverse depth is linear in screen space, and so is the dot product of a triangle's normal
-//! with the (unnormalised) ray `((cx - u) / fx, (cy - v) / fy, 1)` of pixel `(u, v)`: both are
-//! stepped per pixel, and the second gives the surface's obliquity without a per-pixel
-//! normal. Vertices are projected once per mesh. Small triangles (most of an avatar's) are
-//! filled by testing the pixels of their bounding box against the three edge functions; large
-//! ones row by row, each row one span whose ends come from the edge functions.
+//! Inverse depth is linear in screen space and is stepped per pixel; the dot product of a
+//! triangle's unit normal with the (unnormalised) ray `((cx - u) / fx, (cy - v) / fy, 1)` of
+//! pixel `(u, v)`, which gives the surface's obliquity, is that inverse depth times the
+//! plane's distance from the camera, found from the inverse depth's plane (no normal in
+//! sensor space, no test per triangle but on its projection). Vertices are projected once
+//! per mesh. Triangles are filled row by row, each row one span whose ends come from the
+//! edge functions.
 //! A mesh marked closed skips the triangles facing away from the camera.
 
 use glam::{Vec2, Vec3};
@@ -16,9 +17,6 @@ use crate::camera::{DepthCamera, HEIGHT, PIXELS, WIDTH};
 /// Triangles nearer than this are left out (the device sees nothing nearer than 0.5 m; a
 /// scene has nothing there), metres.
 const NEAR_M: f32 = 0.1;
-
-/// Bounding boxes up to this many pixels wide are filled pixel by pixel.
-const SMALL_WIDTH: f32 = 8.0;
 
 /// Edge functions down to `-SLACK` (pixels along x) count as inside: the z-test decides
 /// between triangles sharing an edge, and no pixel centre on a shared edge is missed.
@@ -104,45 +102,46 @@ impl DepthBuffer {
     ) {
         let mut projected = std::mem::take(&mut self.projected);
         projected.clear();
+        // A vertex that cannot be drawn (nearer than `NEAR_M`, behind the camera, not
+        // finite) projects to `NaN`: every triangle with it has a `NaN` area and is skipped,
+        // with no test per triangle.
         projected.extend(positions.iter().map(|p| {
             let iz = 1.0 / p.z;
-            (
-                Vec2::new(
-                    camera.cx - camera.fx * p.x * iz,
-                    camera.cy - camera.fy * p.y * iz,
-                ),
-                iz,
-            )
+            if p.is_finite() && p.z >= NEAR_M {
+                (
+                    Vec2::new(
+                        camera.cx - camera.fx * p.x * iz,
+                        camera.cy - camera.fy * p.y * iz,
+                    ),
+                    iz,
+                )
+            } else {
+                (Vec2::NAN, f32::NAN)
+            }
         }));
         for t in triangles {
-            let [Some(&a), Some(&b), Some(&c)] = t.map(|i| positions.get(i as usize)) else {
+            let [Some(&a), Some(&b), Some(&c)] = t.map(|i| projected.get(i as usize)) else {
                 continue;
             };
-            if a.z < NEAR_M || b.z < NEAR_M || c.z < NEAR_M {
-                continue;
-            }
-            let n = (b - a).cross(c - a);
-            // Seen from the camera (at the origin), an outward face turned away has its
-            // normal along the ray to it.
-            if closed && n.dot(a) >= 0.0 {
-                continue;
-            }
-            let p = t.map(|i| projected[i as usize]);
-            self.draw_triangle(camera, p, n, (a + b + c).is_finite(), label);
+            self.draw_triangle(camera, [a, b, c], closed, label);
         }
         self.projected = projected;
     }
 
+    /// Draws one projected triangle. Its signed area in pixels has the sign of `n · a` for
+    /// its normal `n = (b - a) × (c - a)` and corner `a` in sensor space (the determinant
+    /// of the three corners, over their positive depths; flipping both image axes keeps
+    /// the sign): negative for a face turned towards the camera.
     fn draw_triangle(
         &mut self,
         camera: &DepthCamera,
         [(mut pa, mut iza), (mut pb, mut izb), (pc, izc)]: [(Vec2, f32); 3],
-        normal: Vec3,
-        finite: bool,
+        closed: bool,
         label: u8,
     ) {
         let mut area = cross(pb - pa, pc - pa);
-        if area.is_nan() || area.abs() < 1e-9 {
+        // (A face turned away from the camera, of a closed mesh: its front covers it.)
+        if area.is_nan() || area.abs() < 1e-9 || (closed && area > 0.0) {
             return;
         }
         // Counter-clockwise in pixel coordinates, so that inside is where every edge is ≥ 0.
@@ -158,16 +157,12 @@ impl DepthBuffer {
         if max.x < 0.0 || max.y < 0.0 || min.x > limit.x || min.y > limit.y {
             return;
         }
-        let lo = Vec2::new(ceil_non_negative(min.x), ceil_non_negative(min.y));
+        // (Within the image from here: every value is in 0..640.)
+        let lo = Vec2::new(ceil_float(min.x.max(0.0)), ceil_float(min.y.max(0.0)));
         let hi = max.min(limit);
-        let hi = Vec2::new(floor_non_negative(hi.x), floor_non_negative(hi.y));
+        let hi = Vec2::new(floor_float(hi.x), floor_float(hi.y));
+        // Most of a distant body's triangles cover no pixel centre: they end here.
         if lo.x > hi.x || lo.y > hi.y {
-            return;
-        }
-        // The unit normal only now: most of a distant body's triangles cover no pixel centre
-        // (a square root and a division saved on each).
-        let n = normal.normalize_or_zero();
-        if !(n.is_finite() && finite) {
             return;
         }
         // Edge e's function at (x, y) is base + dx x + dy y, inside down to its threshold
@@ -189,86 +184,123 @@ impl DepthBuffer {
             iz_dx += e.1 * inv_area * iz;
             iz_dy += e.2 * inv_area * iz;
         }
-        // So is the normal's dot product with the pixel's ray.
-        let (d_dx, d_dy) = (-n.x / camera.fx, -n.y / camera.fy);
-        let d_base = n.x * camera.cx / camera.fx + n.y * camera.cy / camera.fy + n.z;
-        let (x0, x1, y0, y1) = (lo.x as usize, hi.x as usize, lo.y as usize, hi.y as usize);
-        if hi.x - lo.x < SMALL_WIDTH {
-            for j in y0..=y1 {
-                self.touched.add(j, x0, x1 + 1);
-            }
-            for j in y0..=y1 {
-                let y = j as f32;
-                let row = j * WIDTH;
-                for i in x0..=x1 {
-                    let x = i as f32;
-                    // Without branches: which pixels of a small triangle's box are inside is
-                    // a coin toss for the branch predictor.
-                    let inside = edges.iter().fold(true, |inside, &(base, dx, dy, t)| {
-                        inside & (base + dx * x + dy * y >= t)
-                    });
-                    let k = row + i;
-                    let iz = iz_base + iz_dx * x + iz_dy * y;
-                    let take = inside & (iz > self.inverse_z[k]);
-                    let d = (d_base + d_dx * x + d_dy * y).abs();
-                    self.inverse_z[k] = if take { iz } else { self.inverse_z[k] };
-                    self.label[k] = if take { label } else { self.label[k] };
-                    self.normal_dot_ray[k] = if take { d } else { self.normal_dot_ray[k] };
-                }
-            }
+        // The surface's obliquity from the same plane, without its normal in sensor space:
+        // on the plane `n · X = D` (unit `n`), a pixel's ray `r` meets it at `1/z = n · r / D`,
+        // so `n / D = (-fx iz_dx, -fy iz_dy, iz_base + cx iz_dx + cy iz_dy)` and
+        // `|n · r| = |D| / z`: the inverse depth times the plane's distance from the camera.
+        let n_over_d = Vec3::new(
+            -camera.fx * iz_dx,
+            -camera.fy * iz_dy,
+            iz_base + camera.cx * iz_dx + camera.cy * iz_dy,
+        );
+        let distance = n_over_d.length_recip();
+        if !distance.is_finite() {
             return;
         }
-        for j in y0..=y1 {
-            let y = j as f32;
-            // The span where every edge function is above its threshold.
-            let (mut x0, mut x1) = (lo.x, hi.x);
-            for &(base, dx, dy, t) in &edges {
-                let at_y = base + dy * y - t;
-                if dx.abs() < 1e-12 {
-                    if at_y < 0.0 {
-                        x1 = -1.0;
-                    }
-                } else if dx > 0.0 {
-                    x0 = x0.max((-at_y / dx).ceil());
+        // Row by row, the span where every edge function is above its threshold. A row meets
+        // edge e at x = c0 + cy y: an edge rising along x bounds the span's start, a falling
+        // one its end, and a level one the rows. A triangle has at most two of each kind; the
+        // slots left over hold edges that bound nothing, so that every row takes two starts
+        // and two ends without a branch (on which kind an edge is, branches were
+        // mispredicted about 20,000 times a frame). (Only the pixels inside are
+        // visited: testing every pixel of a small triangle's box cost more.)
+        let (mut y_lo, mut y_hi) = (lo.y, hi.y);
+        let (mut starts, mut ends) = ([(f32::MIN, 0.0); 2], [(f32::MAX, 0.0); 2]);
+        let (mut n_starts, mut n_ends) = (0, 0);
+        for (base, dx, dy, t) in edges {
+            let at0 = base - t;
+            if dx.abs() < 1e-12 {
+                // Inside where at0 + dy y >= 0.
+                let (y_min, y_max) = (lo.y - 1.0, hi.y + 1.0);
+                if dy > 0.0 {
+                    y_lo = y_lo.max(ceil_small((-at0 / dy).clamp(y_min, y_max)) as f32);
+                } else if dy < 0.0 {
+                    y_hi = y_hi.min(floor_small((at0 / -dy).clamp(y_min, y_max)) as f32);
+                } else if at0 < 0.0 {
+                    return;
+                }
+            } else {
+                let per_x = -1.0 / dx;
+                let crossing = (at0 * per_x, dy * per_x);
+                if dx > 0.0 {
+                    starts[n_starts % 2] = crossing;
+                    n_starts += 1;
                 } else {
-                    x1 = x1.min((-at_y / dx).floor());
+                    ends[n_ends % 2] = crossing;
+                    n_ends += 1;
                 }
             }
-            if x0 > x1 {
-                continue;
-            }
-            self.touched.add(j, x0 as usize, x1 as usize + 1);
-            let row = j * WIDTH;
-            let mut iz = iz_base + iz_dy * y + iz_dx * x0;
-            let mut d = d_base + d_dy * y + d_dx * x0;
-            for i in x0 as usize..=x1 as usize {
-                self.write(row + i, iz, label, d);
-                iz += iz_dx;
-                d += d_dx;
-            }
         }
-    }
-
-    #[inline]
-    fn write(&mut self, k: usize, iz: f32, label: u8, normal_dot_ray: f32) {
-        if iz > self.inverse_z[k] {
-            self.inverse_z[k] = iz;
-            self.label[k] = label;
-            self.normal_dot_ray[k] = normal_dot_ray.abs();
+        if y_lo > y_hi {
+            return;
+        }
+        let [(s0, sy0), (s1, sy1)] = starts;
+        let [(e0, ey0), (e1, ey1)] = ends;
+        // (Integers from here: a float's conversion to `usize` is a dozen instructions.)
+        let (fx_lo, fx_hi) = (lo.x - 1.0, hi.x + 1.0);
+        let mut y = y_lo;
+        for j in y_lo as i32 as usize..y_hi as i32 as usize + 1 {
+            // (Kept within the box, so that the conversions see small finite numbers.)
+            let x0 = lo.x.max(s0 + sy0 * y).max(s1 + sy1 * y).min(fx_hi);
+            let x1 = hi.x.min(e0 + ey0 * y).min(e1 + ey1 * y).max(fx_lo);
+            let (x0, x1) = (ceil_small(x0), floor_small(x1));
+            if x0 <= x1 {
+                let (i0, i1) = (x0 as usize, x1 as usize + 1);
+                self.touched.add(j, i0, i1);
+                let r = j * WIDTH + i0..j * WIDTH + i1;
+                let mut iz = iz_base + iz_dy * y + iz_dx * x0 as f32;
+                let pixels = self.inverse_z[r.clone()]
+                    .iter_mut()
+                    .zip(&mut self.normal_dot_ray[r.clone()])
+                    .zip(&mut self.label[r]);
+                for ((z, d), l) in pixels {
+                    if iz > *z {
+                        (*z, *d, *l) = (iz, iz * distance, label);
+                    }
+                    iz += iz_dx;
+                }
+            }
+            y += 1.0;
         }
     }
 }
 
-/// `ceil(max(x, 0))` for `x` below 2^31.
-fn ceil_non_negative(x: f32) -> f32 {
-    let x = x.max(0.0);
-    let t = (x as i32) as f32;
-    if t < x { t + 1.0 } else { t }
+/// `ceil(x)` for `|x|` below 2^31 (`f32::ceil` and `floor` are library calls on baseline
+/// x86-64).
+#[inline]
+fn ceil_small(x: f32) -> i32 {
+    let t = x as i32;
+    t + i32::from((t as f32) < x)
 }
 
-/// `floor(x)` for `0 <= x < 2^31`.
-fn floor_non_negative(x: f32) -> f32 {
-    (x as i32) as f32
+/// `floor(x)` for `|x|` below 2^31.
+#[inline]
+fn floor_small(x: f32) -> i32 {
+    let t = x as i32;
+    t - i32::from((t as f32) > x)
+}
+
+/// `ceil(x)` for `|x|` below 2^22, without leaving floating point (a conversion to an
+/// integer and back is several instructions, four per triangle's box).
+#[inline]
+fn ceil_float(x: f32) -> f32 {
+    let r = round_float(x);
+    r + if r < x { 1.0 } else { 0.0 }
+}
+
+/// `floor(x)` for `|x|` below 2^22.
+#[inline]
+fn floor_float(x: f32) -> f32 {
+    let r = round_float(x);
+    r - if r > x { 1.0 } else { 0.0 }
+}
+
+/// `x` rounded to the nearest integer (ties to even) for `|x|` below 2^22: once 1.5 · 2^23
+/// is added, no bit of the sum is below the units.
+#[inline]
+fn round_float(x: f32) -> f32 {
+    const MAGIC: f32 = 12_582_912.0;
+    (x + MAGIC) - MAGIC
 }
 
 fn cross(a: Vec2, b: Vec2) -> f32 {

@@ -3,32 +3,25 @@
 //! ([`NoiseTables::coefficients`]): the σ of its axial error in raw steps, its lateral σ level,
 //! whether it is beside a jump, and the raw value it can be read as. A still room's
 //! coefficients are kept from frame to frame. What is drawn anew each frame is then one
-//! branch-free pass ([`NoiseTables::readings`]): per pixel a hash, three table reads, the
-//! reading of the pixel its lateral error lands on, and the quantisation.
+//! branch-free pass ([`NoiseTables::readings`]): per pixel a hash, two table reads
+//! ([`super::tables`]: the pixel its lateral error lands on, its normal sample), the reading
+//! of that pixel, and the quantisation.
 //!
 //! A pixel without a reading whatever its noise (nothing seen, a part one pixel thin, a
 //! surface too oblique) has a `NaN` σ, and a pixel that cannot be read (nothing, projector
 //! shadow, out of range) a `NaN` raw value: the reading is then `NaN`, outside the raw scale,
 //! and the pixel reads nothing, without a branch.
 
-use rand::SeedableRng;
-use rand_chacha::ChaCha8Rng;
-use rand_distr::{Distribution, StandardNormal};
-
 use super::NoiseSettings;
 use super::edges::{JUMP, SHADOW, THIN};
 use super::spans::Spans;
+use super::tables::{
+    LATERAL_ENTRIES, LATERAL_LEVELS, NORMALS, axial_sigma_raw, facing_angle, lateral_level,
+    lateral_pairs, lateral_sigma_of_level, lowbias32, normal_quantiles,
+};
 use crate::camera::{self, DepthCamera, HEIGHT, RAW_NO_VALUE, WIDTH};
-use crate::noise::{GRAZING_LIMIT, axial_sigma_with_grazing_m, grazing_factor, lateral_sigma_px};
+use crate::noise::{GRAZING_LIMIT, grazing_factor, lateral_sigma_px};
 
-/// Normal samples drawn once; a frame's noise indexes them with its own seeded stream (a
-/// hash and a table read per sample, instead of a transcendental per sample).
-const TABLE: usize = 1 << 16;
-
-/// Entries of a lateral offset table (12 bits of a pixel's hash).
-const LATERAL_ENTRIES: usize = 1 << 12;
-/// Lateral σ levels, from 0.8 px (facing the camera) up (see [`lateral_level`]).
-const LATERAL_LEVELS: usize = 16;
 /// In a pixel's class: beside a jump (lost on the coin's toss); the low bits are its lateral
 /// σ level.
 const BESIDE_JUMP: u8 = 0x80;
@@ -41,22 +34,26 @@ const RAW_VALUES: usize = RAW_NO_VALUE as usize + 1;
 
 /// The border of [`Coefficients::source`] around the image: the largest lateral offset, in
 /// pixels (the tables' are at most 5).
-const PAD: usize = 8;
+pub(super) const PAD: usize = 8;
 /// A row of [`Coefficients::source`].
-const PADDED_WIDTH: usize = WIDTH + 2 * PAD;
+pub(super) const PADDED_WIDTH: usize = WIDTH + 2 * PAD;
 const PADDED_PIXELS: usize = PADDED_WIDTH * (HEIGHT + 2 * PAD);
+/// The length of [`Coefficients::source`]: the padded image, rounded up to a power of two so
+/// that an index masked into it needs no test.
+const SOURCE_LEN: usize = PADDED_PIXELS.next_power_of_two();
 
 /// The error model's tables, built once per camera.
 pub struct NoiseTables {
-    normals: Box<[f32; TABLE]>,
+    normals: Box<[f32; NORMALS]>,
     /// Per `cos² θ` in 1/1024 steps: the lateral σ level and the grazing factor
     /// `θ² / (π/2 - θ)²` of the axial σ, so no pixel computes an arc cosine.
     facing_table: Vec<(u8, f32)>,
-    /// Per lateral σ level, whole-pixel offsets `round(σ g)` for normal samples `g`: a
-    /// pixel's lateral error is two table reads.
-    lateral_offsets: Box<[[i8; LATERAL_ENTRIES]; LATERAL_LEVELS]>,
+    /// Per lateral σ level, the pixel read for a lateral error on each axis, as an offset
+    /// in [`Coefficients::source`] ([`lateral_pairs`]): a pixel's lateral error is one
+    /// table read.
+    lateral_offsets: Box<[[i16; LATERAL_ENTRIES]; LATERAL_LEVELS]>,
     /// The same, all zero: the offsets without lateral error.
-    no_offsets: Box<[[i8; LATERAL_ENTRIES]; LATERAL_LEVELS]>,
+    no_offsets: Box<[[i16; LATERAL_ENTRIES]; LATERAL_LEVELS]>,
     /// Per raw value: the axial σ facing the camera and its grazing coefficient, in raw
     /// steps (see [`axial_sigma_raw`]).
     axial_table: Vec<(f32, f32)>,
@@ -65,6 +62,9 @@ pub struct NoiseTables {
     /// `1 / |r|²` of each pixel's ray (see [`super::raster::DepthBuffer::normal_dot_ray`]),
     /// for the camera of [`Self::camera`].
     inverse_ray2: Vec<f32>,
+    /// Per image column, a fixed hash ([`lowbias32`] of its index) that each row's salt and
+    /// one more round make the pixel's hash.
+    columns: [u32; WIDTH],
     camera: DepthCamera,
 }
 
@@ -80,7 +80,7 @@ pub struct Coefficients {
     /// there is nothing to read. With a border of [`PAD`] pixels repeating the image's edge
     /// ([`padded`]), so that a lateral error that leaves the image reads its edge without
     /// a test per pixel.
-    pub source: Vec<f32>,
+    pub source: Box<[f32; SOURCE_LEN]>,
 }
 
 /// The index in [`Coefficients::source`] of pixel `k`.
@@ -95,7 +95,11 @@ impl Default for Coefficients {
         Self {
             class: vec![0; pixels],
             sigma: vec![f32::NAN; pixels],
-            source: vec![f32::NAN; PADDED_PIXELS],
+            // (Not `Box::new([..])`: 2 MB through the stack.)
+            source: vec![f32::NAN; SOURCE_LEN]
+                .into_boxed_slice()
+                .try_into()
+                .unwrap_or_else(|_| unreachable!("the length is SOURCE_LEN")),
         }
     }
 }
@@ -144,14 +148,9 @@ impl Coefficients {
 
 impl NoiseTables {
     pub fn new(camera: DepthCamera) -> Self {
-        let mut rng = ChaCha8Rng::seed_from_u64(0x6b69_6e65_6374);
-        let normals: Box<[f32; TABLE]> =
-            Box::new(std::array::from_fn(|_| StandardNormal.sample(&mut rng)));
+        let normals = normal_quantiles::<NORMALS>();
         let lateral_offsets = Box::new(std::array::from_fn(|level| {
-            let sigma = lateral_sigma_of_level(level);
-            // (Within the border of `Coefficients::source`: no table entry comes near it.)
-            let most = PAD as f32;
-            std::array::from_fn(|m| (sigma * normals[m]).round().clamp(-most, most) as i8)
+            lateral_pairs(f64::from(lateral_sigma_of_level(level)))
         }));
         let mm = camera::raw_mm_table();
         Self {
@@ -170,6 +169,7 @@ impl NoiseTables {
             axial_table: (0..=RAW_NO_VALUE).map(axial_sigma_raw).collect(),
             mm_of_raw: Box::new(std::array::from_fn(|r| mm.get(r).copied().unwrap_or(0))),
             inverse_ray2: super::raster::inverse_ray_length_squared(&camera),
+            columns: std::array::from_fn(|i| lowbias32(i as u32)),
             camera,
         }
     }
@@ -191,18 +191,62 @@ impl NoiseTables {
         let cos2_limit = GRAZING_LIMIT.cos().powi(2);
         let (iz_far, iz_near) = (1.0 / self.camera.max_m, 1.0 / self.camera.min_m);
         let (range_on, grazing_on, axial_on) = (n.range, n.grazing, n.axial);
+        // Per pixel of a row, the indices into the two tables, then the table reads, then
+        // the arithmetic on them: three loops, of which the compiler vectorises the first and
+        // the last (in one loop, none of it was).
+        let mut facing_index = [0u32; WIDTH];
+        let mut axial_index = [0u32; WIDTH];
+        let mut level = [0u8; WIDTH];
+        let mut grazing = [0f32; WIDTH];
+        let mut axial = [0f32; WIDTH];
         // The pixels `lo..hi` of row `j`, over slices (no index tests per pixel).
         let mut row = |j: usize, lo: usize, hi: usize| {
             let (a, b) = (j * WIDTH + lo, j * WIDTH + hi);
             let p = padded(j * WIDTH);
-            let pixels = iz[a..b]
+            let (iz, normal_dot_ray, flags) = (&iz[a..b], &normal_dot_ray[a..b], &flags[a..b]);
+            let inverse_ray2 = &self.inverse_ray2[a..b];
+            let n = b - a;
+            let indices = iz
                 .iter()
-                .zip(&normal_dot_ray[a..b])
-                .zip(&flags[a..b])
-                .zip(&self.inverse_ray2[a..b])
+                .zip(normal_dot_ray.iter().zip(inverse_ray2))
+                .zip(facing_index[..n].iter_mut().zip(&mut axial_index[..n]));
+            for ((&here, (&d, &inverse_ray2)), (facing, axial)) in indices {
+                // How squarely the surface here faces its ray (the neighbour a lateral error
+                // reads is, but at edges, the same surface).
+                let cos2 = (d * d * inverse_ray2).min(1.0);
+                *facing = round_small(cos2 * FACING_STEPS as f32).min(FACING_STEPS as u32);
+                // The axial σ at this pixel's own depth (the one read is within a pixel or
+                // two; σ changes little over that).
+                let raw = camera::inverse_metres_to_raw_f32(here);
+                *axial = round_small(raw.clamp(0.0, f32::from(RAW_NO_VALUE)));
+            }
+            let reads = facing_index[..n].iter().zip(&axial_index[..n]).zip(
+                level[..n]
+                    .iter_mut()
+                    .zip(&mut grazing[..n])
+                    .zip(&mut axial[..n]),
+            );
+            for ((&f, &r), ((level, grazing), axial)) in reads {
+                let (l, g) = self.facing_table[f as usize % (FACING_STEPS + 1)];
+                let (facing, per_grazing) = self.axial_table[r as usize % RAW_VALUES];
+                (*level, *grazing) = (l, g);
+                *axial = if axial_on {
+                    facing + per_grazing * g
+                } else {
+                    0.0
+                };
+            }
+            let pixels = iz
+                .iter()
+                .zip(normal_dot_ray.iter().zip(inverse_ray2))
+                .zip(flags.iter().zip(level[..n].iter().zip(&axial[..n])))
                 .zip(out.class[a..b].iter_mut().zip(&mut out.sigma[a..b]))
                 .zip(&mut out.source[p + lo..p + hi]);
-            for (((((&here, &d), &f), &inverse_ray2), (class, sigma)), source) in pixels {
+            for (
+                (((&here, (&d, &inverse_ray2)), (&f, (&level, &axial))), (class, sigma)),
+                source,
+            ) in pixels
+            {
                 // Without branches (edges make them unpredictable): everything is computed
                 // for every pixel, and a pixel without a reading gets `NaN`.
                 let raw = camera::inverse_metres_to_raw_f32(here);
@@ -213,22 +257,9 @@ impl NoiseTables {
                     & (f & SHADOW == 0)
                     & (!range_on | (here >= iz_far) & (here <= iz_near));
                 *source = if readable { raw } else { f32::NAN };
-                // How squarely the surface here faces its ray (the neighbour a lateral error
-                // reads is, but at edges, the same surface).
-                let cos2 = (d * d * inverse_ray2).min(1.0);
-                let (level, grazing) = self.facing_table
-                    [(round_small(cos2 * FACING_STEPS as f32) as usize).min(FACING_STEPS)];
-                // The axial σ at this pixel's own depth (the one read is within a pixel or
-                // two; σ changes little over that).
-                let index = round_small(raw.clamp(0.0, f32::from(RAW_NO_VALUE)));
-                let (facing, per_grazing) = self.axial_table[index as usize % RAW_VALUES];
-                let axial = if axial_on {
-                    facing + per_grazing * grazing
-                } else {
-                    0.0
-                };
                 // No reading whatever the noise: nothing here, a part one pixel thin, or a
                 // surface too oblique.
+                let cos2 = (d * d * inverse_ray2).min(1.0);
                 let lost = (here == 0.0) | (f & THIN != 0) | (grazing_on & (cos2 < cos2_limit));
                 *sigma = if lost { f32::NAN } else { axial };
                 let jump = if f & JUMP != 0 { BESIDE_JUMP } else { 0 };
@@ -285,43 +316,59 @@ impl NoiseTables {
             )
             .enumerate();
         // One hash per pixel gives its lateral offsets, its normal sample and its coin, so
-        // that one pixel's fate does not shift the noise of the others. The pixel read is
-        // `dj` rows and `di` columns away (clamped to the image by the source's border).
-        let reading = |k: usize, p: usize, class: u8, sigma: f32| {
-            let h = splitmix64(stream ^ k as u64);
-            let table = &offsets[usize::from(class) % LATERAL_LEVELS];
-            let di = isize::from(table[(h & 0xfff) as usize]);
-            let dj = isize::from(table[(h >> 12 & 0xfff) as usize]);
-            let s = p.wrapping_add_signed(dj * PADDED_WIDTH as isize + di);
-            let seen = c.source.get(s).copied().unwrap_or(f32::NAN);
-            // Raw values are linear in inverse depth: the reading as a continuous raw value,
-            // its axial error added in raw steps.
-            let raw = seen + sigma * self.normals[(h >> 32 & 0xffff) as usize];
-            // Lost beside a jump on the coin's toss: the class's top bit and the hash's.
-            let kept = (class & (h >> 56) as u8) < BESIDE_JUMP;
-            (raw, kept)
+        // that one pixel's fate does not shift the noise of the others. A row at a time, in
+        // three loops: the hashes (32-bit arithmetic), the table reads (the surface each
+        // pixel's lateral error lands on, its normal sample), then the arithmetic on them.
+        // The first and the last the compiler vectorises; in one loop none of it was (54
+        // instructions per pixel, against about 30 so).
+        let mut row = Row {
+            hashes: [0; WIDTH],
+            seen: [0.0; WIDTH],
+            normal: [0.0; WIDTH],
+        };
+        // Raw values are linear in inverse depth: the reading as a continuous raw value, its
+        // axial error added in raw steps; lost beside a jump on the coin's toss (the class's
+        // top bit and the hash's bit 20).
+        let reading = |h: u32, class: u8, seen: f32, sigma: f32, normal: f32| {
+            let kept = (u32::from(class) & (h >> 13) & u32::from(BESIDE_JUMP)) == 0;
+            (seen + sigma * normal, kept)
         };
         if n.quantise {
             for (j, ((class, sigma), (out_raw, out_mm))) in rows {
-                let (row, p) = (j * WIDTH, padded(j * WIDTH));
-                for i in 0..WIDTH {
-                    let (raw, kept) = reading(row + i, p + i, class[i], sigma[i]);
-                    // The nearest raw value, if the scale holds it.
+                self.sample_row(offsets, c, stream, j, class, &mut row);
+                let Row {
+                    hashes,
+                    seen,
+                    normal,
+                } = &row;
+                let pixels = out_raw
+                    .iter_mut()
+                    .zip(hashes.iter().zip(class))
+                    .zip(seen.iter().zip(sigma).zip(normal));
+                for ((out, (&h, &class)), ((&seen, &sigma), &normal)) in pixels {
+                    let (raw, kept) = reading(h, class, seen, sigma, normal);
+                    // The nearest raw value, if the scale holds it: a select by mask, not a
+                    // branch (beside jumps the coin makes it unpredictable; `NaN` fails both
+                    // comparisons, and `max` then gives 0).
                     let on_scale = kept & (raw >= -0.5) & (raw < f32::from(RAW_NO_VALUE) - 0.5);
-                    let r = if on_scale {
-                        round_small(raw.max(0.0))
-                    } else {
-                        u32::from(RAW_NO_VALUE)
-                    };
-                    out_raw[i] = r as u16;
-                    out_mm[i] = self.mm_of_raw[r as usize % RAW_VALUES];
+                    let mask = u32::from(on_scale).wrapping_neg();
+                    let r = (round_small(raw.max(0.0)) & mask) | (u32::from(RAW_NO_VALUE) & !mask);
+                    *out = r as u16;
+                }
+                for (mm, &r) in out_mm.iter_mut().zip(out_raw.iter()) {
+                    *mm = self.mm_of_raw[usize::from(r) % RAW_VALUES];
                 }
             }
         } else {
             for (j, ((class, sigma), (out_raw, out_mm))) in rows {
-                let (row, p) = (j * WIDTH, padded(j * WIDTH));
+                self.sample_row(offsets, c, stream, j, class, &mut row);
+                let Row {
+                    hashes,
+                    seen,
+                    normal,
+                } = &row;
                 for i in 0..WIDTH {
-                    let (raw, kept) = reading(row + i, p + i, class[i], sigma[i]);
+                    let (raw, kept) = reading(hashes[i], class[i], seen[i], sigma[i], normal[i]);
                     let z = kept.then(|| camera::raw_f32_to_metres(raw)).flatten();
                     (out_mm[i], out_raw[i]) = match z {
                         Some(z) => (
@@ -336,18 +383,50 @@ impl NoiseTables {
     }
 }
 
-/// The axial σ of Nguyen et al. ([`crate::noise`]) at the depth of raw value `raw`, in raw
-/// steps: facing the camera, and per unit of the grazing factor. A depth error `e` small
-/// against `z` moves the raw value by `e / (0.00307 z²)`; the spread facing the camera is
-/// about half a raw step at every depth (the matcher's sub-pixel precision).
-fn axial_sigma_raw(raw: u16) -> (f32, f32) {
-    let Some(z) = camera::raw_to_metres(raw) else {
-        return (0.0, 0.0);
-    };
-    let step = camera::raw_step_m(z);
-    let facing = axial_sigma_with_grazing_m(z, 0.0);
-    let per_grazing = axial_sigma_with_grazing_m(z, 1.0) - facing;
-    (facing / step, per_grazing / step)
+impl NoiseTables {
+    /// Row `j`'s hashes, and per pixel the surface its lateral error lands on and its
+    /// normal sample (table reads only).
+    fn sample_row(
+        &self,
+        offsets: &[[i16; LATERAL_ENTRIES]; LATERAL_LEVELS],
+        c: &Coefficients,
+        stream: u64,
+        j: usize,
+        class: &[u8],
+        row: &mut Row,
+    ) {
+        // A pixel's hash: its column's (drawn once) with the row's salt, mixed by one
+        // multiply-xorshift round (two, from the pixel's index, were a fifth of the pass).
+        let salt = splitmix64(stream ^ j as u64) as u32;
+        for (h, &column) in row.hashes.iter_mut().zip(self.columns.iter()) {
+            let x = column ^ salt;
+            let x = (x ^ (x >> 16)).wrapping_mul(0x7feb_352d);
+            *h = x ^ (x >> 15);
+        }
+        // The pixel read is `dj` rows and `di` columns away (clamped to the image by the
+        // source's border).
+        let p = padded(j * WIDTH);
+        let pixels = row
+            .hashes
+            .iter()
+            .zip(class)
+            .zip(row.seen.iter_mut().zip(row.normal.iter_mut()))
+            .enumerate();
+        for (i, ((&h, &class), (seen, normal))) in pixels {
+            let table = &offsets[usize::from(class) % LATERAL_LEVELS];
+            let s = (p + i).wrapping_add_signed(isize::from(table[(h & 0x3ff) as usize]));
+            // (The offsets stay within the border: `s` is in the padded image.)
+            *seen = c.source[s % SOURCE_LEN];
+            *normal = self.normals[(h >> 21) as usize % NORMALS];
+        }
+    }
+}
+
+/// A row's draws ([`NoiseTables::sample_row`]).
+struct Row {
+    hashes: [u32; WIDTH],
+    seen: [f32; WIDTH],
+    normal: [f32; WIDTH],
 }
 
 /// `x` rounded to the nearest integer (ties to even), for `0 <= x < 2^23`: the low bits of
@@ -374,18 +453,4 @@ pub fn splitmix64(x: u64) -> u64 {
 pub fn next_unit(state: &mut u64) -> f32 {
     *state = splitmix64(*state);
     (*state >> 11) as f32 / (1u64 << 53) as f32
-}
-
-/// The level whose σ is nearest above `sigma` px (levels step 0.02 px from 0.8 px).
-fn lateral_level(sigma: f32) -> u8 {
-    (((sigma - 0.8) / 0.02).ceil().max(0.0) as usize).min(LATERAL_LEVELS - 1) as u8
-}
-
-fn lateral_sigma_of_level(level: usize) -> f32 {
-    0.8 + 0.02 * level as f32
-}
-
-/// The angle between a surface's normal and the ray from its `|cos|`.
-fn facing_angle(facing: f32) -> f32 {
-    facing.clamp(0.0, 1.0).acos()
 }
