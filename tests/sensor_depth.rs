@@ -57,6 +57,57 @@ fn depth_near(depth_mm: &[u16], mask: &[bool], u: i32, v: i32) -> Option<f32> {
     values.get(values.len() / 2).copied()
 }
 
+/// Without `--garment` the person is recorded bare, as `body.json` says, however long the
+/// recording runs (the kiosk in the app dresses a bare avatar in its carousel's first garment:
+/// the "no garment" recordings wore the sun dress from their eighth frame on).
+#[test]
+fn a_recording_without_a_garment_shows_no_garment() {
+    let scratch = Scratch::new("bare-recording");
+    let out = fitroom()
+        .args([
+            "sensor",
+            "record",
+            "--synthetic",
+            "--frames",
+            "30",
+            "--seed",
+            "2",
+        ])
+        .arg("--motion")
+        .arg(fitroom_testdata::clip_path("141_16.bvh"))
+        .arg("--out")
+        .arg(&scratch.0)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("fitroom runs");
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let truth = read_truth(&scratch.0)
+        .expect("readable")
+        .expect("ground truth");
+    assert_eq!(truth.len(), 30);
+    for t in &truth {
+        let body = FrameTruth::mask(&t.body_runs)
+            .iter()
+            .filter(|&&b| b)
+            .count();
+        assert!(body > 10_000, "frame {}: {body} body pixels", t.frame);
+        assert!(
+            t.garment_runs.is_empty(),
+            "frame {}: garment pixels",
+            t.frame
+        );
+    }
+    let body: serde_json::Value = serde_json::from_str(
+        &std::fs::read_to_string(scratch.0.join("body.json")).expect("body.json"),
+    )
+    .expect("JSON");
+    assert!(body["garment"].is_null());
+}
+
 #[test]
 fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
     let scratch = Scratch::new("synthetic-recording");

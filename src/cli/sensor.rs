@@ -17,6 +17,7 @@ use serde::Serialize;
 
 use super::OutputArgs;
 use super::app::Inputs;
+use crate::kiosk::actions::TryOn;
 use crate::{Mode, headless, sensors::SensorSpec};
 
 #[derive(Subcommand)]
@@ -157,6 +158,13 @@ pub(super) fn record_synthetic(args: &RecordArgs) -> Result<RecordReport> {
     options.sensor = SensorSpec::Synthetic;
     options.distance_m = args.distance_m;
     let mut app = headless::headless_app(&options)?;
+    // The person wears what `--garment` says, nothing without it (as `body.json` records):
+    // the kiosk would dress a bare avatar in its carousel's first garment.
+    if options.garment.is_none()
+        && let Some(mut tryon) = app.world_mut().get_resource_mut::<TryOn>()
+    {
+        tryon.keep_bare = true;
+    }
     warm_up(&mut app, options.garment.is_some())?;
     let mut writer = RecordingWriter::create(&args.out)?;
     let mut truth = TruthWriter::create(&args.out)?;

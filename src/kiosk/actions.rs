@@ -69,6 +69,9 @@ pub struct TryOn {
     pub photo: Option<String>,
     /// The folder photos go to.
     pub photo_dir: PathBuf,
+    /// Leave a bare avatar bare (recordings and evaluations of an undressed person); else
+    /// [`dress_when_bare`] dresses it.
+    pub keep_bare: bool,
 }
 
 pub fn add(app: &mut App) {
@@ -200,7 +203,7 @@ fn dress_when_bare(
     mut tryon: ResMut<TryOn>,
     mut request: ResMut<GarmentRequest>,
 ) {
-    if request.path.is_some() || tryon.worn.is_some() {
+    if request.path.is_some() || tryon.worn.is_some() || tryon.keep_bare {
         return;
     }
     if let Some(r) = garment_request(&config, tryon.shown) {
