@@ -38,6 +38,27 @@ fn fitroom() -> Command {
     Command::new(env!("CARGO_BIN_EXE_fitroom"))
 }
 
+/// `fitroom sensor record --synthetic` of CMU 141_16 (waving) into `out` with `args` added;
+/// its JSON report.
+fn record_waving(out: &Path, args: &[&str]) -> serde_json::Value {
+    let run = fitroom()
+        .args(["sensor", "record", "--synthetic"])
+        .args(args)
+        .arg("--motion")
+        .arg(fitroom_testdata::clip_path("141_16.bvh"))
+        .arg("--out")
+        .arg(out)
+        .current_dir(env!("CARGO_MANIFEST_DIR"))
+        .output()
+        .expect("fitroom runs");
+    assert!(
+        run.status.success(),
+        "{}",
+        String::from_utf8_lossy(&run.stderr)
+    );
+    serde_json::from_slice(&run.stdout).expect("a JSON report")
+}
+
 /// The median reading (metres) of the 7x7 pixels around `(u, v)` that see the avatar.
 fn depth_near(depth_mm: &[u16], mask: &[bool], u: i32, v: i32) -> Option<f32> {
     let mut values = Vec::new();
@@ -63,28 +84,7 @@ fn depth_near(depth_mm: &[u16], mask: &[bool], u: i32, v: i32) -> Option<f32> {
 #[test]
 fn a_recording_without_a_garment_shows_no_garment() {
     let scratch = Scratch::new("bare-recording");
-    let out = fitroom()
-        .args([
-            "sensor",
-            "record",
-            "--synthetic",
-            "--frames",
-            "30",
-            "--seed",
-            "2",
-        ])
-        .arg("--motion")
-        .arg(fitroom_testdata::clip_path("141_16.bvh"))
-        .arg("--out")
-        .arg(&scratch.0)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("fitroom runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    record_waving(&scratch.0, &["--frames", "30", "--seed", "2"]);
     let truth = read_truth(&scratch.0)
         .expect("readable")
         .expect("ground truth");
@@ -111,37 +111,22 @@ fn a_recording_without_a_garment_shows_no_garment() {
 #[test]
 fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
     let scratch = Scratch::new("synthetic-recording");
-    let out = fitroom()
-        .args([
-            "sensor",
-            "record",
-            "--synthetic",
+    let report = record_waving(
+        &scratch.0,
+        &[
             "--frames",
             "12",
             "--seed",
             "3",
-        ])
-        .args(["--garment", "assets/garments/sundress.ron"])
-        // A box beside and a second person behind: not the person.
-        .args([
+            "--garment",
+            "assets/garments/sundress.ron",
+            // A box beside and a second person behind: not the person.
             "--synthetic-box",
             "0.9,2.3",
             "--synthetic-person",
             "-1.0,3.3",
-        ])
-        .arg("--motion")
-        .arg(fitroom_testdata::clip_path("141_16.bvh"))
-        .arg("--out")
-        .arg(&scratch.0)
-        .current_dir(env!("CARGO_MANIFEST_DIR"))
-        .output()
-        .expect("fitroom runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
+        ],
     );
-    let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("a JSON report");
     assert_eq!(report["depth_frames"].as_u64(), Some(12));
 
     let recording = Recording::open(&scratch.0).expect("a fakenect recording");

@@ -7,38 +7,17 @@
 //! Run: `taskset -c 0 cargo bench -p fitroom_depth --no-default-features --bench depth` (the
 //! Bevy-free core only; add `-- --quick` for a short run).
 
+mod common;
+
 use std::hint::black_box;
-use std::path::Path;
 
 use criterion::{Criterion, criterion_group, criterion_main};
-use fitroom_body::BodyModel;
 use fitroom_depth::DepthCamera;
 use fitroom_depth::fakenect::{Recording, RecordingWriter};
-use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
-use glam::Vec3;
-
-/// The shipped body standing 2.5 m in front of a sensor 0.8 m above the floor, in a room.
-fn avatar_scene() -> Scene {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
-    let model = BodyModel::read(&path).expect("the shipped body");
-    let n = model.body_vertex_count as usize;
-    let standing = model.standing_in_sensor_space(&model.positions);
-    let positions = model.positions[..n]
-        .iter()
-        .map(|&p| standing.transform_point3(p) + Vec3::new(0.0, -0.8, 2.5))
-        .collect();
-    let mut scene = Scene::room(-0.8, 3.6);
-    scene.meshes.push(SceneMesh {
-        positions,
-        triangles: model.triangles.clone(),
-        label: Label::Body,
-        closed: true,
-    });
-    scene
-}
+use fitroom_depth::synthetic::{NoiseSettings, Scene, SyntheticCamera};
 
 fn bench(c: &mut Criterion) {
-    let scene = avatar_scene();
+    let scene = common::avatar_scene().expect("the shipped body");
     let triangles: usize = scene.meshes.iter().map(|m| m.triangles.len()).sum();
     let mut camera = SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), 1);
     c.bench_function(

@@ -6,33 +6,20 @@
 //! Run: `taskset -c 0 cargo run --release -p fitroom_depth --no-default-features --example
 //! frame_time [N]`.
 
-use std::path::Path;
+#[path = "../benches/common/mod.rs"]
+mod common;
+
 use std::time::Instant;
 
-use fitroom_body::BodyModel;
 use fitroom_depth::DepthCamera;
-use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
-use glam::Vec3;
+use fitroom_depth::synthetic::{NoiseSettings, SyntheticCamera};
 
 fn main() -> Result<(), Box<dyn std::error::Error>> {
     let frames: usize = match std::env::args().nth(1) {
         Some(n) => n.parse()?,
         None => 600,
     };
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
-    let model = BodyModel::read(&path)?;
-    let n = model.body_vertex_count as usize;
-    let standing = model.standing_in_sensor_space(&model.positions);
-    let mut scene = Scene::room(-0.8, 3.6);
-    scene.meshes.push(SceneMesh {
-        positions: model.positions[..n]
-            .iter()
-            .map(|&p| standing.transform_point3(p) + Vec3::new(0.0, -0.8, 2.5))
-            .collect(),
-        triangles: model.triangles.clone(),
-        label: Label::Body,
-        closed: true,
-    });
+    let scene = common::avatar_scene()?;
     let mut camera = SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), 1);
     let mut times: Vec<f64> = (0..frames.max(1))
         .map(|_| {

@@ -201,9 +201,9 @@ impl DepthBuffer {
         // edge e at x = c0 + cy y: an edge rising along x bounds the span's start, a falling
         // one its end, and a level one the rows. A triangle has at most two of each kind; the
         // slots left over hold edges that bound nothing, so that every row takes two starts
-        // and two ends without a branch (on which kind an edge is, branches were
-        // mispredicted about 20,000 times a frame). (Only the pixels inside are
-        // visited: testing every pixel of a small triangle's box cost more.)
+        // and two ends without a branch on which kind an edge is (that kind changes from
+        // triangle to triangle: the predictor cannot learn it). Only the pixels inside are
+        // visited.
         let (mut y_lo, mut y_hi) = (lo.y, hi.y);
         let (mut starts, mut ends) = ([(f32::MIN, 0.0); 2], [(f32::MAX, 0.0); 2]);
         let (mut n_starts, mut n_ends) = (0, 0);

@@ -193,7 +193,7 @@ impl NoiseTables {
         let (range_on, grazing_on, axial_on) = (n.range, n.grazing, n.axial);
         // Per pixel of a row, the indices into the two tables, then the table reads, then
         // the arithmetic on them: three loops, of which the compiler vectorises the first and
-        // the last (in one loop, none of it was).
+        // the last (table reads in the same loop keep it from vectorising any of it).
         let mut facing_index = [0u32; WIDTH];
         let mut axial_index = [0u32; WIDTH];
         let mut level = [0u8; WIDTH];
@@ -319,8 +319,8 @@ impl NoiseTables {
         // that one pixel's fate does not shift the noise of the others. A row at a time, in
         // three loops: the hashes (32-bit arithmetic), the table reads (the surface each
         // pixel's lateral error lands on, its normal sample), then the arithmetic on them.
-        // The first and the last the compiler vectorises; in one loop none of it was (54
-        // instructions per pixel, against about 30 so).
+        // The first and the last the compiler vectorises, which it cannot with the table
+        // reads in the same loop.
         let mut row = Row {
             hashes: [0; WIDTH],
             seen: [0.0; WIDTH],
@@ -333,40 +333,14 @@ impl NoiseTables {
             let kept = (u32::from(class) & (h >> 13) & u32::from(BESIDE_JUMP)) == 0;
             (seen + sigma * normal, kept)
         };
-        if n.quantise {
-            for (j, ((class, sigma), (out_raw, out_mm))) in rows {
-                self.sample_row(offsets, c, stream, j, class, &mut row);
-                let Row {
-                    hashes,
-                    seen,
-                    normal,
-                } = &row;
-                let pixels = out_raw
-                    .iter_mut()
-                    .zip(hashes.iter().zip(class))
-                    .zip(seen.iter().zip(sigma).zip(normal));
-                for ((out, (&h, &class)), ((&seen, &sigma), &normal)) in pixels {
-                    let (raw, kept) = reading(h, class, seen, sigma, normal);
-                    // The nearest raw value, if the scale holds it: a select by mask, not a
-                    // branch (beside jumps the coin makes it unpredictable; `NaN` fails both
-                    // comparisons, and `max` then gives 0).
-                    let on_scale = kept & (raw >= -0.5) & (raw < f32::from(RAW_NO_VALUE) - 0.5);
-                    let mask = u32::from(on_scale).wrapping_neg();
-                    let r = (round_small(raw.max(0.0)) & mask) | (u32::from(RAW_NO_VALUE) & !mask);
-                    *out = r as u16;
-                }
-                for (mm, &r) in out_mm.iter_mut().zip(out_raw.iter()) {
-                    *mm = self.mm_of_raw[usize::from(r) % RAW_VALUES];
-                }
-            }
-        } else {
-            for (j, ((class, sigma), (out_raw, out_mm))) in rows {
-                self.sample_row(offsets, c, stream, j, class, &mut row);
-                let Row {
-                    hashes,
-                    seen,
-                    normal,
-                } = &row;
+        for (j, ((class, sigma), (out_raw, out_mm))) in rows {
+            self.sample_row(offsets, c, stream, j, class, &mut row);
+            let Row {
+                hashes,
+                seen,
+                normal,
+            } = &row;
+            if !n.quantise {
                 for i in 0..WIDTH {
                     let (raw, kept) = reading(hashes[i], class[i], seen[i], sigma[i], normal[i]);
                     let z = kept.then(|| camera::raw_f32_to_metres(raw)).flatten();
@@ -378,6 +352,24 @@ impl NoiseTables {
                         None => (0, RAW_NO_VALUE),
                     };
                 }
+                continue;
+            }
+            let pixels = out_raw
+                .iter_mut()
+                .zip(hashes.iter().zip(class))
+                .zip(seen.iter().zip(sigma).zip(normal));
+            for ((out, (&h, &class)), ((&seen, &sigma), &normal)) in pixels {
+                let (raw, kept) = reading(h, class, seen, sigma, normal);
+                // The nearest raw value, if the scale holds it: a select by mask, not a
+                // branch (beside jumps the coin makes it unpredictable; `NaN` fails both
+                // comparisons, and `max` then gives 0).
+                let on_scale = kept & (raw >= -0.5) & (raw < f32::from(RAW_NO_VALUE) - 0.5);
+                let mask = u32::from(on_scale).wrapping_neg();
+                let r = (round_small(raw.max(0.0)) & mask) | (u32::from(RAW_NO_VALUE) & !mask);
+                *out = r as u16;
+            }
+            for (mm, &r) in out_mm.iter_mut().zip(out_raw.iter()) {
+                *mm = self.mm_of_raw[usize::from(r) % RAW_VALUES];
             }
         }
     }
@@ -396,7 +388,7 @@ impl NoiseTables {
         row: &mut Row,
     ) {
         // A pixel's hash: its column's (drawn once) with the row's salt, mixed by one
-        // multiply-xorshift round (two, from the pixel's index, were a fifth of the pass).
+        // multiply-xorshift round (cheaper than hashing the pixel's index afresh).
         let salt = splitmix64(stream ^ j as u64) as u32;
         for (h, &column) in row.hashes.iter_mut().zip(self.columns.iter()) {
             let x = column ^ salt;

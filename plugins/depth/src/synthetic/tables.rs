@@ -10,8 +10,7 @@ use crate::noise::axial_sigma_with_grazing_m;
 
 /// Entries of the table of normal quantiles a frame's axial errors are read from (the top 11
 /// bits of a pixel's hash): a table read per sample instead of a transcendental, from a
-/// table small enough to stay in the first-level cache (8 kB; it was 65,536 random samples,
-/// 256 kB).
+/// table small enough to stay in the first-level cache (8 kB).
 pub(super) const NORMALS: usize = 1 << 11;
 
 /// Entries of a lateral offset table (the low 10 bits of a pixel's hash).
@@ -37,7 +36,7 @@ pub(super) fn axial_sigma_raw(raw: u16) -> (f32, f32) {
 /// `round(σ g)` for a standard normal `g`, independently, the tails folded into ±[`PAD`])
 /// appears in proportion to its probability, to 1/[`LATERAL_ENTRIES`] (largest remainders),
 /// as the offset `dj · PADDED_WIDTH + di` of the pixel read: a uniformly drawn entry is a
-/// draw of the pixel read. (It was two tables, one per axis, and a multiplication per pixel.)
+/// draw of the pixel read, in one table read per pixel.
 pub(super) fn lateral_pairs(sigma: f64) -> [i16; LATERAL_ENTRIES] {
     let most = PAD as i32;
     let cdf = |x: f64| 0.5 * libm::erfc(-x / std::f64::consts::SQRT_2);
