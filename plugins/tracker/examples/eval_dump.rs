@@ -7,7 +7,7 @@
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
 //!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
-//!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`: override the settings.
+//!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`: override the settings.
 //!
 //! CPU time per frame (this thread's, from `/proc/thread-self/schedstat`: this host's wall
 //! time is noisier) goes to stderr.
@@ -47,6 +47,9 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("HUBER") {
         s.fit.huber_m = v;
     }
+    if let Some(v) = env("SCALE_STIFF") {
+        s.fit.scale_stiffness = v;
+    }
     if let Some(v) = env("OUTLIER") {
         s.fit.outlier_m = v;
     }
@@ -79,6 +82,7 @@ fn main() -> Result<(), Error> {
     let mut eval = Evaluation::new();
     let mut signed = [(Vec3::ZERO, 0usize); 20];
     let mut cpu_ms: Vec<f64> = Vec::new();
+    let mut last_size = None;
     for (entry, line) in recording.depth_entries().zip(&truth) {
         let frame = recording.read_depth(entry, DepthCamera::default())?;
         let joints: Vec<Vec3> = line.joints.iter().map(|j| Vec3::from_array(*j)).collect();
@@ -86,6 +90,7 @@ fn main() -> Result<(), Error> {
         let out = eval.step(&mut tracker, &frame, &joints);
         cpu_ms.push(cpu_ns().saturating_sub(start) as f64 / 1e6);
         let Some(t) = out else { continue };
+        last_size = Some(t.pose.scale * tracker.body.height_m);
         for ((sum, j), g) in signed.iter_mut().zip(&t.joints).zip(&joints) {
             sum.0 += j.position - *g;
             sum.1 += 1;
@@ -120,6 +125,9 @@ fn main() -> Result<(), Error> {
         cpu_ms.get(cpu_ms.len() * 95 / 100),
     ) {
         eprintln!("cpu ms per frame: median {median:.2}, p95 {p95:.2}");
+    }
+    if let Some(size) = last_size {
+        eprintln!("height (the body's, as sized in the last frame tracked): {size:.4} m");
     }
     if let Some(e) = &tracker.shape {
         eprintln!(

@@ -22,6 +22,12 @@ use crate::segment::{SegmentSettings, Segmentation, Segmenter};
 use crate::shape::{Estimate, ShapeSearchError, ShapeSettings, Snapshot, estimate};
 use crate::silhouette::Silhouette;
 
+/// The person's size from the frames tracked well ([`Tracker::refine_size`]): set anew every
+/// `SIZE_EVERY` of them to the `SIZE_QUANTILE` of all so far, until `SIZE_FRAMES`.
+const SIZE_EVERY: usize = 15;
+const SIZE_FRAMES: usize = 90;
+const SIZE_QUANTILE: f32 = 0.8;
+
 /// How the tracker runs.
 #[derive(Clone, Copy, Debug)]
 pub struct TrackerSettings {
@@ -112,6 +118,10 @@ pub struct Tracked {
     pub started: bool,
     /// Shared: the app's user map holds the same one (no copy of the mask per frame).
     pub person: Arc<Segmentation>,
+    /// How many times the tracker has changed its body's build or size: the joints move
+    /// when it does, though the person did not (to tell the two apart, e.g. when checking
+    /// that the person stands still).
+    pub body_changes: u32,
 }
 
 impl Tracked {
@@ -131,6 +141,16 @@ impl Tracked {
             joints,
         }
     }
+}
+
+/// A frame the person is tracked well in, wholly in the image: the build and the size are
+/// measured on such frames.
+fn tracked_well(started: bool, fit: &FitStats, person: &Segmentation) -> bool {
+    !started
+        && fit.inliers >= 0.8
+        && fit.outside <= 0.1
+        && person.bbox[1] > 0
+        && usize::from(person.bbox[3]) + 1 < HEIGHT
 }
 
 /// Where the estimate of the person's build is.
@@ -159,6 +179,10 @@ pub struct Tracker {
     pose: Option<Pose>,
     /// The person's size (the body's scale), measured when they were first seen whole.
     scale: Option<f32>,
+    /// The sizes the frames tracked well imply ([`Self::refine_size`]).
+    sizing: Vec<f32>,
+    /// See [`Tracked::body_changes`].
+    body_changes: u32,
     /// Per Kinect bone, the inverse of the motion pipeline's constant `C` (its driver's rest
     /// frame against the sensor's T-pose reference): the orientation reported is the driver's
     /// frame times it, so the retargeter's `G = Q C` gives back the fitted frame.
@@ -193,6 +217,8 @@ impl Tracker {
             points: Vec::new(),
             pose: None,
             scale: None,
+            sizing: Vec::new(),
+            body_changes: 0,
             starts: 0,
             recoveries: 0,
             recovery: Fitter::default(),
@@ -228,11 +254,7 @@ impl Tracker {
     /// runs the search when enough are kept; takes its answer when it is ready.
     fn estimate_shape(&mut self, frame: &DepthFrame, tracked: &Tracked) {
         let settings = self.settings.shape;
-        let good = !tracked.started
-            && tracked.fit.inliers >= 0.8
-            && tracked.fit.outside <= 0.1
-            && tracked.person.bbox[1] > 0
-            && usize::from(tracked.person.bbox[3]) + 1 < HEIGHT;
+        let good = tracked_well(tracked.started, &tracked.fit, &tracked.person);
         match &mut self.estimation {
             Estimation::Collecting(kept, since) => {
                 *since = since.saturating_add(1);
@@ -294,6 +316,49 @@ impl Tracker {
         self.body = estimate.body.clone();
         self.corrections = corrections(&self.body);
         self.shape = Some(estimate);
+        // The new body's head reads otherwise: measure the size on it again.
+        self.sizing.clear();
+        self.body_changes = self.body_changes.wrapping_add(1);
+    }
+
+    fn forget_size(&mut self) {
+        self.scale = None;
+        self.sizing.clear();
+    }
+
+    /// The size measured again in frames tracked well: each frame's top seen against the
+    /// top of the fitted body's outline as posed (frames whose fitted top is not the head
+    /// are skipped). The size measured when the tracking starts comes from one frame and
+    /// the rest pose, and the person may walk with bent knees or a bowed head there; the fit
+    /// explains a person bowed as well by a smaller body standing straighter. A posture only
+    /// ever lowers the top, so the size is an upper quantile of the frames'
+    /// ([`SIZE_QUANTILE`]), set anew every [`SIZE_EVERY`] frames until [`SIZE_FRAMES`].
+    fn refine_size(&mut self, person: &Segmentation, pose: &mut Pose, well: bool) {
+        if self.sizing.len() >= SIZE_FRAMES || !well || self.settings.scale.is_some() {
+            return;
+        }
+        let floor = person.floor;
+        let on_floor = -floor.normal * floor.d;
+        let head = self.body.kinect[KinectJoint::Head.index()].0;
+        match self.body.seen_top(&self.posed, on_floor, floor.normal) {
+            Some((top, bone)) if bone == head && top > 0.5 => {
+                self.sizing.push(pose.scale * person.top_m / top);
+            }
+            _ => return,
+        }
+        if !self.sizing.len().is_multiple_of(SIZE_EVERY) {
+            return;
+        }
+        let mut sorted = self.sizing.clone();
+        sorted.sort_by(f32::total_cmp);
+        let at = ((sorted.len() - 1) as f32 * SIZE_QUANTILE).round() as usize;
+        let size = sorted[at].clamp(0.75, 1.3);
+        // Grown about the soles, which stay where they are.
+        let sole = Vec3::Y * self.body.sole_y;
+        pose.translation += pose.rotation * (sole * (pose.scale - size));
+        pose.scale = size;
+        self.scale = Some(size);
+        self.body_changes = self.body_changes.wrapping_add(1);
     }
 
     /// A new person: the default body until their build is estimated anew (a body of the
@@ -315,7 +380,7 @@ impl Tracker {
     /// Forgets the person: the next frame starts afresh.
     pub fn reset(&mut self) {
         self.pose = None;
-        self.scale = None;
+        self.forget_size();
         self.segmenter.reset();
         self.forget_shape();
     }
@@ -325,7 +390,7 @@ impl Tracker {
         self.search_ms = None;
         let Some(person) = self.segmenter.segment(frame) else {
             self.pose = None;
-            self.scale = None;
+            self.forget_size();
             self.forget_shape();
             return None;
         };
@@ -363,6 +428,8 @@ impl Tracker {
             return None;
         }
         let joints = self.joints(frame, &pose);
+        let mut pose = pose;
+        self.refine_size(&person, &mut pose, tracked_well(started, &fit, &person));
         self.pose = Some(pose.clone());
         let tracked = Tracked {
             joints,
@@ -370,6 +437,7 @@ impl Tracker {
             fit,
             started,
             person: Arc::new(person),
+            body_changes: self.body_changes,
         };
         self.estimate_shape(frame, &tracked);
         Some(tracked)
@@ -463,10 +531,19 @@ impl Tracker {
             ),
             (true, None) => None,
         };
+        // Beneath the centroid of what is seen, half a body's depth behind it.
+        let spot = |scale: f32| {
+            let centre = person.centroid + person.centroid.normalize_or_zero() * 0.08 * scale;
+            centre - floor.normal * floor.height(centre)
+        };
         let scale = match (self.settings.scale.or(self.scale), top) {
             (Some(s), _) => s,
             (None, Some(top)) if whole => {
-                let s = (top / self.body.height_m).clamp(0.75, 1.3);
+                // The top seen is the outline's, under the crown.
+                let seen = self
+                    .body
+                    .rest_seen_top(spot(top / self.body.height_m), floor.normal);
+                let s = (top / seen).clamp(0.75, 1.3);
                 self.scale = Some(s);
                 s
             }
@@ -474,9 +551,7 @@ impl Tracker {
             // size until the person is seen whole.
             _ => 1.0,
         };
-        // Beneath the centroid of what is seen, half a body's depth behind it.
-        let centre = person.centroid + person.centroid.normalize_or_zero() * 0.08 * scale;
-        let spot = centre - floor.normal * floor.height(centre);
+        let spot = spot(scale);
         let mut pose = self.body.standing(Vec3::ZERO, scale);
         let up = Quat::from_rotation_arc(Vec3::Y, floor.normal);
         pose.rotation = (up * pose.rotation).normalize();

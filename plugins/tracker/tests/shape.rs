@@ -15,9 +15,9 @@ use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
 use glam::Vec3;
 
 /// Mean trunk error (m) over the frames after `from` of the person of `shape` moving their
-/// arms, 2.6 m away, with a tracker that keeps the default body and one that estimates the
-/// build; and the estimated build.
-fn trunk_errors(shape: &Shape, from: usize) -> (f32, f32, Shape) {
+/// arms, 2.6 m away (frame `k`'s noise seed `seed + k`), with a tracker that keeps the
+/// default body and one that estimates the build; and the estimated build.
+fn trunk_errors(shape: &Shape, from: usize, seed: u64) -> (f32, f32, Shape) {
     let person = shaped_body(shape);
     let model = Arc::new(common::model());
     let default_body = TrackBody::new(&model, &model.positions).expect("a trackable body");
@@ -36,7 +36,7 @@ fn trunk_errors(shape: &Shape, from: usize) -> (f32, f32, Shape) {
         let (skin, truth) = person.posed(&person.locals(&turns, share), Vec3::new(0.1, -0.8, 2.6));
         let frame = render(
             &scene(vec![(skin, Label::Body)], &person.model.triangles),
-            k as u64 + 40,
+            k as u64 + seed,
             f64::from(t),
         );
         let a = fixed.track(&frame).expect("tracked with the default body");
@@ -61,22 +61,28 @@ fn trunk_errors(shape: &Shape, from: usize) -> (f32, f32, Shape) {
     (sum_fixed / n as f32, sum_estimated / n as f32, estimate)
 }
 
-/// The estimated build's trunk error is at most `ratio` of the default body's on `shape`.
-fn assert_trunk_nearer(shape: &Shape, ratio: f32) {
-    let (fixed, estimated, found) = trunk_errors(shape, 40);
-    println!(
-        "trunk: default body {:.1} mm, estimated build {:.1} mm; found gender {:.2} weight {:.2} muscle {:.2}",
-        fixed * 1000.0,
-        estimated * 1000.0,
-        found.gender,
-        found.weight,
-        found.muscle
-    );
+/// The estimated build's trunk error is at most `ratio` of the default body's on `shape`,
+/// on average over the noise seeds `seeds`.
+fn assert_trunk_nearer(shape: &Shape, ratio: f32, seeds: &[u64]) {
+    let (mut fixed, mut estimated) = (0.0, 0.0);
+    for &seed in seeds {
+        let (f, e, found) = trunk_errors(shape, 40, seed);
+        println!(
+            "seed {seed}: trunk: default body {:.1} mm, estimated build {:.1} mm; found gender {:.2} weight {:.2} muscle {:.2}",
+            f * 1000.0,
+            e * 1000.0,
+            found.gender,
+            found.weight,
+            found.muscle
+        );
+        fixed += f;
+        estimated += e;
+    }
     assert!(
         estimated < fixed * ratio,
         "trunk error {:.1} mm with the estimate vs {:.1} mm without",
-        estimated * 1000.0,
-        fixed * 1000.0
+        estimated * 1000.0 / seeds.len() as f32,
+        fixed * 1000.0 / seeds.len() as f32
     );
 }
 
@@ -90,12 +96,13 @@ fn a_broad_mans_build_puts_his_trunk_joints_nearer_the_truth() {
             ..Shape::default()
         },
         0.85,
+        &[40],
     );
 }
 
 /// She gains least (her build is not found: gender, weight and muscle trade off, see
-/// docs/STATUS.md): over six noise seeds (frame seeds from 40, 140, ..., 540) her trunk error
-/// with the estimate was 85-89 % of the default body's.
+/// docs/STATUS.md), and how much depends on the noise: with the default body her trunk error
+/// is 16.4-16.7 mm at these six seeds, with the estimate 11.9-19.0 mm (one seed worse).
 #[test]
 fn a_slight_womans_build_puts_her_trunk_joints_nearer_the_truth() {
     assert_trunk_nearer(
@@ -106,6 +113,7 @@ fn a_slight_womans_build_puts_her_trunk_joints_nearer_the_truth() {
             ..Shape::default()
         },
         0.92,
+        &[40, 140, 240, 340, 440, 540],
     );
 }
 

@@ -39,6 +39,13 @@ pub fn shaped_body(shape: &fitroom_body::Shape) -> Body {
     Body::of(model, positions)
 }
 
+/// The shipped body scaled by `factor` (the same proportions, another size).
+pub fn scaled_body(factor: f32) -> Body {
+    let model = model();
+    let positions = model.positions.iter().map(|p| *p * factor).collect();
+    Body::of(model, positions)
+}
+
 /// Model-space turns (axis, degrees) of named bones about their heads, applied parents first.
 pub type Turns<'a> = &'a [(&'a str, Vec3, f32)];
 

@@ -1,0 +1,89 @@
+//! The person's size, measured while tracking: people of the tracker's own proportions but
+//! other sizes (the default body scaled), who come into view with the head bowed and the
+//! knees bent (the top seen then is centimetres under their standing height) or standing
+//! straight. The size the tracker ends with against the body's true stature.
+
+mod common;
+
+use common::{ARMS_OUT, Turns, render, scaled_body, scene};
+use fitroom_depth::synthetic::Label;
+use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
+use glam::Vec3;
+
+/// Head bowed, knees bent, arms a little out.
+const BOWED: Turns = &[
+    ("neck_01", Vec3::X, 35.0),
+    ("thigh_l", Vec3::X, -20.0),
+    ("calf_l", Vec3::X, 35.0),
+    ("thigh_r", Vec3::X, -20.0),
+    ("calf_r", Vec3::X, 35.0),
+    ("upperarm_l", Vec3::Z, 20.0),
+    ("upperarm_r", Vec3::Z, -20.0),
+];
+
+/// The person's stature and the height of the tracker's body as sized after 2 s, 3 m away:
+/// if `bowed`, the first half second bowed, then standing up over half a second; the arms
+/// out.
+fn stature_and_tracked(factor: f32, bowed: bool, seed: u64) -> (f32, f32) {
+    let person = scaled_body(factor);
+    let rest = vec![glam::Quat::IDENTITY; person.model.bones.len()];
+    let (skin, _) = person.posed(&rest, Vec3::ZERO);
+    let (lo, hi) = skin
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.y), hi.max(p.y))
+        });
+    let model = common::model();
+    let body = TrackBody::new(&model, &model.positions).expect("a trackable body");
+    let mut tracker = Tracker::new(body, TrackerSettings::default());
+    let mut size = None;
+    for k in 0..60 {
+        let up = if bowed {
+            ((k as f32 - 15.0) / 15.0).clamp(0.0, 1.0)
+        } else {
+            1.0
+        };
+        let mut locals = person.locals(BOWED, 1.0 - up);
+        let out = person.locals(ARMS_OUT, 0.5 * up);
+        for (l, o) in locals.iter_mut().zip(out) {
+            *l = (*l * o).normalize();
+        }
+        let (skin, _) = person.posed(&locals, Vec3::new(0.05, -0.8, 3.0));
+        let frame = render(
+            &scene(vec![(skin, Label::Body)], &person.model.triangles),
+            seed + k,
+            k as f64 / 30.0,
+        );
+        let tracked = tracker.track(&frame).expect("the person tracked");
+        size = Some(tracked.pose.scale * tracker.body.height_m);
+    }
+    (hi - lo, size.expect("tracked"))
+}
+
+/// Sized within 1 % of the stature whether first seen bowed or standing straight.
+fn assert_sized(factor: f32, seed: u64) {
+    let (stature, straight) = stature_and_tracked(factor, false, seed);
+    let (_, bowed) = stature_and_tracked(factor, true, seed);
+    let percent = |h: f32| (h / stature - 1.0) * 100.0;
+    println!(
+        "stature {:.1} cm; tracked first seen standing straight {:.1} cm ({:+.2} %), bowed {:.1} cm ({:+.2} %)",
+        stature * 100.0,
+        straight * 100.0,
+        percent(straight),
+        bowed * 100.0,
+        percent(bowed),
+    );
+    for h in [straight, bowed] {
+        assert!(percent(h).abs() < 1.0, "sized {:+.2} % off", percent(h));
+    }
+}
+
+#[test]
+fn a_tall_person_who_comes_in_bowed_is_sized_to_their_stature() {
+    assert_sized(1.1, 300);
+}
+
+#[test]
+fn a_short_person_who_comes_in_bowed_is_sized_to_their_stature() {
+    assert_sized(0.9, 400);
+}
