@@ -79,6 +79,10 @@ pub struct Collector {
     pub settings: CollectSettings,
     frames: Vec<CalibrationFrame>,
     done: Vec<CollectedView>,
+    /// The joints a still person keeps to, and the tracker's body they were found with
+    /// ([`Tracked::body_changes`]): the view's first frame, or the first since the tracker
+    /// changed its body (its joints move then, the person does not).
+    still: Option<(u32, [Vec3; KinectJoint::COUNT])>,
 }
 
 /// How far `a` is turned from `b` about the vertical, degrees.
@@ -181,21 +185,24 @@ impl Collector {
             }
         }
         let f = calibration_frame(frame, tracked);
-        if let Some(first) = self.frames.first() {
-            // Turned, the far arm's joints are the tracker's guesses and wander: the trunk
-            // says whether the person stands still.
-            let judged: &[KinectJoint] = if self.done.is_empty() {
-                &KinectJoint::ALL
-            } else {
-                &TRUNK
-            };
-            let moved = judged
-                .iter()
-                .map(|j| f.joints[j.index()].distance(first.joints[j.index()]))
-                .fold(0.0, f32::max);
-            if moved > self.settings.still_m {
-                return self.restart_view("Please stand still for a second");
+        match self.still {
+            Some((body, reference)) if !self.frames.is_empty() && body == tracked.body_changes => {
+                // Turned, the far arm's joints are the tracker's guesses and wander: the
+                // trunk says whether the person stands still.
+                let judged: &[KinectJoint] = if self.done.is_empty() {
+                    &KinectJoint::ALL
+                } else {
+                    &TRUNK
+                };
+                let moved = judged
+                    .iter()
+                    .map(|j| f.joints[j.index()].distance(reference[j.index()]))
+                    .fold(0.0, f32::max);
+                if moved > self.settings.still_m {
+                    return self.restart_view("Please stand still for a second");
+                }
             }
+            _ => self.still = Some((tracked.body_changes, f.joints)),
         }
         self.frames.push(f);
         if self.frames.len() < self.settings.need {
