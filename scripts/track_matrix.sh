@@ -43,6 +43,8 @@
 #   FITROOM  the binary (default: ${CARGO_TARGET_DIR:-$HOME/.cache/fitroom-target}/release/fitroom;
 #            build it with `cargo build --release --bin fitroom`)
 #   CLIPS    only these clips, e.g. CLIPS="07_01 141_16" (default: all of INDEX.tsv)
+#   GARMENTS only these garment choices, e.g. GARMENTS="none tshirt" (default: none tshirt
+#            sundress); a recording's seed is the whole matrix's either way
 set -euo pipefail
 
 die() {
@@ -107,7 +109,27 @@ declare -A FIT=(
     [median_man]="--gender male --age 28 --stature 175.5 --inside-leg 82.5 --shoulder-width 41.8 --neck 42.6 --bust 104.7 --navel-waist 96.1 --hip 101.0 --thigh 61.4 --calf 37.9"
     [heavy_man]="--gender male --age 28 --stature 178.2 --inside-leg 82.6 --shoulder-width 45.5 --neck 44.2 --bust 120.8 --navel-waist 110.7 --hip 115.3 --thigh 73.0 --calf 44.6"
 )
-GARMENTS=(none tshirt sundress)
+ALL_GARMENTS=(none tshirt sundress)
+if [[ -n ${GARMENTS:-} ]]; then
+    read -r -a GARMENTS <<<"$GARMENTS"
+else
+    GARMENTS=("${ALL_GARMENTS[@]}")
+fi
+# A garment choice's place in the whole matrix (for the seed), checking it exists.
+garment_row() {
+    local i
+    for i in "${!ALL_GARMENTS[@]}"; do
+        if [[ ${ALL_GARMENTS[$i]} == "$1" ]]; then
+            echo "$i"
+            return 0
+        fi
+    done
+    return 1
+}
+for garment in "${GARMENTS[@]}"; do
+    garment_row "$garment" >/dev/null ||
+        die "garment choice '$garment' is not one of: ${ALL_GARMENTS[*]}"
+done
 declare -A GARMENT_FILE=([tshirt]=assets/garments/tshirt.ron [sundress]=assets/garments/sundress.ron)
 declare -A SIZE=(
     [small_woman.tshirt]=S [median_man.tshirt]=L [heavy_man.tshirt]=XL
@@ -198,8 +220,8 @@ for clip in "${SELECTED[@]}"; do
     row=$(clip_row "$clip")
     for bi in "${!BODIES[@]}"; do
         body=${BODIES[$bi]}
-        for gi in "${!GARMENTS[@]}"; do
-            garment=${GARMENTS[$gi]}
+        for garment in "${GARMENTS[@]}"; do
+            gi=$(garment_row "$garment")
             done_count=$((done_count + 1))
             name=${clip}_${body}_${garment}
             dir=$OUT/$name
@@ -213,7 +235,7 @@ for clip in "${SELECTED[@]}"; do
                 echo "$tag: incomplete folder, recording it again"
                 rm -rf -- "$dir"
             fi
-            seed=$((1 + (row * ${#BODIES[@]} + bi) * ${#GARMENTS[@]} + gi))
+            seed=$((1 + (row * ${#BODIES[@]} + bi) * ${#ALL_GARMENTS[@]} + gi))
             # No more frames than the clip lasts: past its end the clip starts again, and the
             # jump back to its first pose is no motion a person makes.
             frames=$(clip_frames "$clip")
