@@ -40,11 +40,7 @@ fn an_exported_obj_measures_like_the_json_report() {
         .arg(&shape)
         .output()
         .expect("runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
 
     let obj = dir.join("heavy_female.obj");
@@ -55,11 +51,7 @@ fn an_exported_obj_measures_like_the_json_report() {
         .arg(&obj)
         .output()
         .expect("runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
 
     let body_path = fitroom::assets::assets_dir()
         .expect("assets")
@@ -129,11 +121,7 @@ fn bad_shape_files_name_the_file_field_and_range() {
 
 fn run_ok(args: &[&str]) -> Vec<u8> {
     let out = fitroom().args(args).output().expect("runs");
-    assert!(
-        out.status.success(),
-        "{args:?}: {}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, format!("{args:?}"));
     out.stdout
 }
 

@@ -17,11 +17,7 @@ fn sensor_inspect_prints_json_for_every_clip() {
             .arg("--json")
             .output()
             .expect("fitroom runs");
-        assert!(
-            out.status.success(),
-            "{file}: {}",
-            String::from_utf8_lossy(&out.stderr)
-        );
+        common::assert_succeeded(&out, &file);
         let v: serde_json::Value = serde_json::from_slice(&out.stdout).expect("valid JSON");
         assert_eq!(v["frames"].as_u64(), Some(frames as u64), "{file}");
         assert!(
@@ -79,11 +75,7 @@ fn headless_run_reports_json_without_a_display() {
         .env_remove("WAYLAND_DISPLAY")
         .output()
         .expect("fitroom runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let v: serde_json::Value =
         serde_json::from_str(&std::fs::read_to_string(&report).expect("report written"))
             .expect("JSON");

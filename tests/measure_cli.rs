@@ -3,6 +3,8 @@
 //! calibration's checks as the kiosk measures; a dump too short for a calibration is an
 //! error that says what is missing.
 
+mod common;
+
 use std::path::Path;
 use std::process::{Command, Output};
 
@@ -39,18 +41,10 @@ fn a_recorded_calibration_is_measured_from_its_dump() {
     // Subject 3 (a woman, 160 cm). (Subject 5, a 182 cm woman, is one of the 4.5 % whose
     // gender the fit gets wrong through the tracker: docs/measure.md.)
     let out = fitroom(&["measure", "record", d, "--index", "3", "--frames", "50"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let truth = json(&dir.join("truth.json"));
     let out = fitroom(&["measure", "dump", d, "--json"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let measured: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     println!("{measured}");
     assert_eq!(
@@ -83,11 +77,7 @@ fn a_dump_too_short_for_a_calibration_says_what_is_missing() {
     let dir = scratch("short-calibration");
     let d = dir.to_str().expect("a UTF-8 path");
     let out = fitroom(&["measure", "record", d, "--index", "2", "--frames", "12"]);
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let out = fitroom(&["measure", "dump", d]);
     assert!(!out.status.success());
     let err = String::from_utf8_lossy(&out.stderr);

@@ -3,6 +3,8 @@
 //! going when a frame of it is lost; a Kinect that is not there is reported, and the app
 //! keeps going.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 use std::time::{Duration, Instant};
@@ -51,11 +53,7 @@ fn record_waving(out: &Path, args: &[&str]) -> serde_json::Value {
         .current_dir(env!("CARGO_MANIFEST_DIR"))
         .output()
         .expect("fitroom runs");
-    assert!(
-        run.status.success(),
-        "{}",
-        String::from_utf8_lossy(&run.stderr)
-    );
+    common::assert_succeeded(&run, "");
     serde_json::from_slice(&run.stdout).expect("a JSON report")
 }
 
@@ -176,7 +174,7 @@ fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
         .arg(&scratch.0)
         .output()
         .expect("fitroom runs");
-    assert!(out.status.success());
+    common::assert_succeeded(&out, "sensor inspect");
     let summary: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(summary["depth_frames"].as_u64(), Some(12));
     assert_eq!(summary["ground_truth_lines"].as_u64(), Some(12));
@@ -189,11 +187,7 @@ fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
         .arg(&scratch.0)
         .output()
         .expect("fitroom runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(report["segmented"].as_u64(), Some(12));
     for part in report["parts"].as_array().expect("parts") {
@@ -238,11 +232,7 @@ fn a_synthetic_recording_carries_ground_truth_that_agrees_with_its_depth() {
         .arg(&scratch.0)
         .output()
         .expect("fitroom runs");
-    assert!(
-        out.status.success(),
-        "{}",
-        String::from_utf8_lossy(&out.stderr)
-    );
+    common::assert_succeeded(&out, "");
     let report: serde_json::Value = serde_json::from_slice(&out.stdout).expect("JSON");
     assert_eq!(report["overall"]["tracked_frames"].as_u64(), Some(12));
     let trunk = report["overall"]["trunk_mean_mm"]

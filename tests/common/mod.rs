@@ -13,6 +13,16 @@ pub fn cmu_index() -> Vec<(String, usize)> {
         .collect()
 }
 
+/// Fails the test, with the command's stderr and `what` it was, unless it succeeded.
+#[track_caller]
+pub fn assert_succeeded(out: &std::process::Output, what: impl std::fmt::Display) {
+    assert!(
+        out.status.success(),
+        "{what}: {}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
 /// Where test outputs (screenshots, reports) go.
 pub fn out_dir() -> PathBuf {
     let dir = PathBuf::from(env!("CARGO_TARGET_TMPDIR")).join("fitroom-tests");
