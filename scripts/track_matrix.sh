@@ -87,17 +87,21 @@ if [[ -n ${CLIPS:-} ]]; then
 else
     SELECTED=("${ALL_CLIPS[@]}")
 fi
-# The clip's row in INDEX.tsv (for the seed), checking the clip exists.
-clip_row() {
-    local i
-    for i in "${!ALL_CLIPS[@]}"; do
-        if [[ ${ALL_CLIPS[$i]} == "$1" ]]; then
+# The place of NAME in the list that follows it (for the seed: a clip's row in INDEX.tsv, a
+# garment choice's in the whole matrix); fails if it is not there.
+index_of() {
+    local name=$1 i=0 item
+    shift
+    for item in "$@"; do
+        if [[ $item == "$name" ]]; then
             echo "$i"
             return 0
         fi
+        i=$((i + 1))
     done
     return 1
 }
+clip_row() { index_of "$1" "${ALL_CLIPS[@]}"; }
 for clip in "${SELECTED[@]}"; do
     clip_row "$clip" >/dev/null || die "clip '$clip' is not in $INDEX (clips: ${ALL_CLIPS[*]})"
     [[ -f data/mocap/cmu/$clip.bvh.gz ]] || die "missing clip file data/mocap/cmu/$clip.bvh.gz"
@@ -115,17 +119,7 @@ if [[ -n ${GARMENTS:-} ]]; then
 else
     GARMENTS=("${ALL_GARMENTS[@]}")
 fi
-# A garment choice's place in the whole matrix (for the seed), checking it exists.
-garment_row() {
-    local i
-    for i in "${!ALL_GARMENTS[@]}"; do
-        if [[ ${ALL_GARMENTS[$i]} == "$1" ]]; then
-            echo "$i"
-            return 0
-        fi
-    done
-    return 1
-}
+garment_row() { index_of "$1" "${ALL_GARMENTS[@]}"; }
 for garment in "${GARMENTS[@]}"; do
     garment_row "$garment" >/dev/null ||
         die "garment choice '$garment' is not one of: ${ALL_GARMENTS[*]}"
