@@ -376,11 +376,18 @@ impl TrackBody {
     /// [`Self::seen_top`] of the rest pose at scale 1 standing on the floor at `spot` (its up
     /// `up`); the body's height if no skin qualifies.
     pub fn rest_seen_top(&self, spot: Vec3, up: Vec3) -> f32 {
-        let mut pose = self.standing(Vec3::ZERO, 1.0);
-        pose.rotation = (Quat::from_rotation_arc(Vec3::Y, up) * pose.rotation).normalize();
-        pose.translation = spot - pose.rotation * (Vec3::Y * self.sole_y);
+        let pose = self.standing_on(spot, up, 1.0);
         self.seen_top(&self.pose(&pose), spot, up)
             .map_or(self.height_m, |(h, _)| h)
+    }
+
+    /// The rest pose facing the sensor, at `scale`, standing with its soles at `spot` on a
+    /// floor whose up is `up` (sensor space).
+    pub fn standing_on(&self, spot: Vec3, up: Vec3, scale: f32) -> Pose {
+        let mut pose = self.standing(Vec3::ZERO, scale);
+        pose.rotation = (Quat::from_rotation_arc(Vec3::Y, up) * pose.rotation).normalize();
+        pose.translation = spot - pose.rotation * (Vec3::Y * self.sole_y * scale);
+        pose
     }
 
     /// Evaluates `pose` into `out` (its storage reused).

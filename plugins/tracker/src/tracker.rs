@@ -551,11 +551,7 @@ impl Tracker {
             // size until the person is seen whole.
             _ => 1.0,
         };
-        let spot = spot(scale);
-        let mut pose = self.body.standing(Vec3::ZERO, scale);
-        let up = Quat::from_rotation_arc(Vec3::Y, floor.normal);
-        pose.rotation = (up * pose.rotation).normalize();
-        pose.translation = spot - pose.rotation * (Vec3::Y * self.body.sole_y * scale);
+        let mut pose = self.body.standing_on(spot(scale), floor.normal, scale);
         let targets: Vec<(usize, Vec3, f32)> = ends
             .iter()
             .filter_map(|e| {
