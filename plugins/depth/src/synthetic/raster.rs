@@ -9,7 +9,8 @@
 //! edge functions.
 //! A mesh marked closed skips the triangles facing away from the camera.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
+use multiversion::multiversion;
 
 use super::spans::Spans;
 use crate::camera::{DepthCamera, HEIGHT, PIXELS, WIDTH};
@@ -100,6 +101,18 @@ impl DepthBuffer {
         label: u8,
         closed: bool,
     ) {
+        draw_mesh(self, camera, (positions, triangles), label, closed);
+    }
+
+    /// [`Self::draw`], inlined into each of [`draw_mesh`]'s versions.
+    #[inline(always)]
+    fn draw_inlined(
+        &mut self,
+        camera: &DepthCamera,
+        (positions, triangles): (&[Vec3], &[[u32; 3]]),
+        label: u8,
+        closed: bool,
+    ) {
         let mut projected = std::mem::take(&mut self.projected);
         projected.clear();
         // A vertex that cannot be drawn (nearer than `NEAR_M`, behind the camera, not
@@ -132,6 +145,7 @@ impl DepthBuffer {
     /// its normal `n = (b - a) × (c - a)` and corner `a` in sensor space (the determinant
     /// of the three corners, over their positive depths; flipping both image axes keeps
     /// the sign): negative for a face turned towards the camera.
+    #[inline(always)]
     fn draw_triangle(
         &mut self,
         camera: &DepthCamera,
@@ -199,15 +213,14 @@ impl DepthBuffer {
         }
         // Row by row, the span where every edge function is above its threshold. A row meets
         // edge e at x = c0 + cy y: an edge rising along x bounds the span's start, a falling
-        // one its end, and a level one the rows. A triangle has at most two of each kind; the
-        // slots left over hold edges that bound nothing, so that every row takes two starts
-        // and two ends without a branch on which kind an edge is (that kind changes from
-        // triangle to triangle: the predictor cannot learn it). Only the pixels inside are
-        // visited.
+        // one its end, and a level one the rows. Each edge gives both a start and an end, the
+        // one it does not bound left at the image's far side, so that every row takes three
+        // of each without a branch on which kind an edge is (that kind changes from triangle
+        // to triangle: a branch on it was mispredicted for one triangle in two, measured with
+        // cachegrind). Only the pixels inside are visited.
         let (mut y_lo, mut y_hi) = (lo.y, hi.y);
-        let (mut starts, mut ends) = ([(f32::MIN, 0.0); 2], [(f32::MAX, 0.0); 2]);
-        let (mut n_starts, mut n_ends) = (0, 0);
-        for (base, dx, dy, t) in edges {
+        let (mut starts, mut ends) = ([(f32::MIN, 0.0); 3], [(f32::MAX, 0.0); 3]);
+        for (e, (base, dx, dy, t)) in edges.into_iter().enumerate() {
             let at0 = base - t;
             if dx.abs() < 1e-12 {
                 // Inside where at0 + dy y >= 0.
@@ -221,48 +234,172 @@ impl DepthBuffer {
                 }
             } else {
                 let per_x = -1.0 / dx;
-                let crossing = (at0 * per_x, dy * per_x);
-                if dx > 0.0 {
-                    starts[n_starts % 2] = crossing;
-                    n_starts += 1;
-                } else {
-                    ends[n_ends % 2] = crossing;
-                    n_ends += 1;
-                }
+                let (c0, cy) = (at0 * per_x, dy * per_x);
+                // (By arithmetic: the compiler turns a select on floats into a branch. With
+                // `far` the largest float on the side away from the span, `min` and `max` keep
+                // the bound an edge gives and put the other at the far side; the slope of the
+                // far one is zeroed.)
+                let far = f32::MAX.copysign(dx);
+                let rising = f32::from(u8::from(dx > 0.0));
+                starts[e] = (c0.min(far), cy * rising);
+                ends[e] = (c0.max(far), cy * (1.0 - rising));
             }
         }
         if y_lo > y_hi {
             return;
         }
-        let [(s0, sy0), (s1, sy1)] = starts;
-        let [(e0, ey0), (e1, ey1)] = ends;
+        let [(s0, sy0), (s1, sy1), (s2, sy2)] = starts;
+        let [(e0, ey0), (e1, ey1), (e2, ey2)] = ends;
         // (Integers from here: a float's conversion to `usize` is a dozen instructions.)
         let (fx_lo, fx_hi) = (lo.x - 1.0, hi.x + 1.0);
+        // The rows' pixels the triangle may touch: its box (a row's span would need a test
+        // for an empty one).
+        let (box_lo, box_hi) = (lo.x as i32 as usize, hi.x as i32 as usize + 1);
         let mut y = y_lo;
         for j in y_lo as i32 as usize..y_hi as i32 as usize + 1 {
             // (Kept within the box, so that the conversions see small finite numbers.)
-            let x0 = lo.x.max(s0 + sy0 * y).max(s1 + sy1 * y).min(fx_hi);
-            let x1 = hi.x.min(e0 + ey0 * y).min(e1 + ey1 * y).max(fx_lo);
+            let x0 = larger(
+                larger(lo.x, s0 + sy0 * y),
+                larger(s1 + sy1 * y, s2 + sy2 * y),
+            );
+            let x1 = smaller(
+                smaller(hi.x, e0 + ey0 * y),
+                smaller(e1 + ey1 * y, e2 + ey2 * y),
+            );
+            let (x0, x1) = (smaller(x0, fx_hi), larger(x1, fx_lo));
             let (x0, x1) = (ceil_small(x0), floor_small(x1));
-            if x0 <= x1 {
-                let (i0, i1) = (x0 as usize, x1 as usize + 1);
-                self.touched.add(j, i0, i1);
-                let r = j * WIDTH + i0..j * WIDTH + i1;
-                let mut iz = iz_base + iz_dy * y + iz_dx * x0 as f32;
-                let pixels = self.inverse_z[r.clone()]
-                    .iter_mut()
-                    .zip(&mut self.normal_dot_ray[r.clone()])
-                    .zip(&mut self.label[r]);
-                for ((z, d), l) in pixels {
-                    if iz > *z {
-                        (*z, *d, *l) = (iz, iz * distance, label);
-                    }
-                    iz += iz_dx;
-                }
-            }
+            self.touched.add(j, box_lo, box_hi);
+            let iz = iz_base + iz_dy * y + iz_dx * x0 as f32;
+            // (`x0` is within 0..=640: the row's first pixel or the next row's.)
+            let count = (x1 - x0 + 1).max(0) as usize;
+            let span = Span {
+                start: j * WIDTH + x0 as usize,
+                count,
+                iz,
+                iz_dx,
+            };
+            self.fill(span, distance, label);
             y += 1.0;
         }
     }
+
+    /// Keeps the nearer of the span's surface and what is drawn, pixel by pixel. Four
+    /// pixels at a time, those past the span's end masked, so that a short span (a small
+    /// triangle's row: one to three pixels) and an empty one take the same path: a loop
+    /// whose length changes from row to row, or a test for an empty row, is mispredicted
+    /// every few rows (measured with cachegrind: a third of the rasteriser's mispredictions
+    /// each). Masked pixels are written back as they were, so pixels past the row's end
+    /// are left alone.
+    #[inline(always)]
+    fn fill(&mut self, span: Span, distance: f32, label: u8) {
+        let Span {
+            mut start,
+            count,
+            mut iz,
+            iz_dx,
+        } = span;
+        let mut left = count;
+        loop {
+            let r = start..start + LANES;
+            let (Some(z), Some(d), Some(l)) = (
+                self.inverse_z.get_mut(r.clone()),
+                self.normal_dot_ray.get_mut(r.clone()),
+                self.label.get_mut(r),
+            ) else {
+                // The image's last pixels: one at a time.
+                let end = (start + left).min(PIXELS);
+                for k in start..end {
+                    if iz > self.inverse_z[k] {
+                        self.inverse_z[k] = iz;
+                        self.normal_dot_ray[k] = iz * distance;
+                        self.label[k] = label;
+                    }
+                    iz += iz_dx;
+                }
+                return;
+            };
+            // (glam's `Vec4` is four SSE lanes: its comparisons and selects are masks, which
+            // the compiler cannot turn back into branches.)
+            let (z4, d4) = (Vec4::from_slice(z), Vec4::from_slice(d));
+            let (a, b) = (iz, iz + iz_dx);
+            let (c, e) = (b + iz_dx, b + iz_dx + iz_dx);
+            let iz4 = Vec4::new(a, b, c, e);
+            let nearer = iz4.cmpgt(z4) & LANE.cmplt(Vec4::splat(left as f32));
+            Vec4::select(nearer, iz4, z4).write_to_slice(z);
+            Vec4::select(nearer, iz4 * distance, d4).write_to_slice(d);
+            let keep = BYTE_MASKS[nearer.bitmask() as usize % 16];
+            let old = u32::from_le_bytes([l[0], l[1], l[2], l[3]]);
+            let new = (old & !keep) | ((u32::from(label) * 0x0101_0101) & keep);
+            l.copy_from_slice(&new.to_le_bytes());
+            iz = e + iz_dx;
+            if left <= LANES {
+                return;
+            }
+            left -= LANES;
+            start += LANES;
+        }
+    }
+}
+
+/// [`DepthBuffer::draw`] compiled for the instruction set of x86-64 CPUs since 2013 (AVX2,
+/// FMA: x86-64-v3) and for any x86-64, the one the CPU runs chosen when first called (the
+/// `multiversion` crate). Measured on the dressed frame: 10-15 % faster, with the other
+/// passes so compiled ([`crate::synthetic`]).
+#[multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+popcnt+f16c+movbe"))]
+fn draw_mesh(
+    buffer: &mut DepthBuffer,
+    camera: &DepthCamera,
+    mesh: (&[Vec3], &[[u32; 3]]),
+    label: u8,
+    closed: bool,
+) {
+    buffer.draw_inlined(camera, mesh, label, closed);
+}
+
+/// Pixels [`DepthBuffer::fill`] takes at a time.
+const LANES: usize = 4;
+
+/// Each lane's index.
+const LANE: Vec4 = Vec4::new(0.0, 1.0, 2.0, 3.0);
+
+/// Per 4-bit lane mask, the bytes of the lanes set.
+const BYTE_MASKS: [u32; 16] = {
+    let mut masks = [0u32; 16];
+    let mut m = 0;
+    while m < 16 {
+        let mut lane = 0;
+        while lane < 4 {
+            if m & (1 << lane) != 0 {
+                masks[m] |= 0xff << (8 * lane);
+            }
+            lane += 1;
+        }
+        m += 1;
+    }
+    masks
+};
+
+/// A row's pixels inside a triangle: `count` from pixel `start` on, whose inverse depth is
+/// `iz` and steps by `iz_dx`.
+struct Span {
+    start: usize,
+    count: usize,
+    iz: f32,
+    iz_dx: f32,
+}
+
+/// The smaller of two numbers that are not `NaN` (the span's bounds, from finite corners):
+/// one instruction, where `f32::min`, which must return the other of a `NaN` and a number,
+/// takes three.
+#[inline(always)]
+fn smaller(a: f32, b: f32) -> f32 {
+    if a < b { a } else { b }
+}
+
+/// The larger of two numbers that are not `NaN`.
+#[inline(always)]
+fn larger(a: f32, b: f32) -> f32 {
+    if a > b { a } else { b }
 }
 
 /// `ceil(x)` for `|x|` below 2^31 (`f32::ceil` and `floor` are library calls on baseline
@@ -357,6 +494,41 @@ mod tests {
             (drawn as f32 - area).abs() < 0.01 * area,
             "{drawn} vs {area}"
         );
+    }
+
+    /// A plane over the whole image, nearer than one drawn before only on the image's right
+    /// half: every pixel is drawn, to the image's last (the four-pixel fill's tail there),
+    /// and the nearer surface is kept on each side, to the column.
+    #[test]
+    fn every_pixel_to_the_last_and_the_nearer_surface_kept() {
+        let camera = DepthCamera::default();
+        let plane = |z_left: f32, z_right: f32| {
+            let (l, r) = (-0.5, WIDTH as f32 - 0.5);
+            let (t, b) = (-0.5, HEIGHT as f32 - 0.5);
+            [
+                camera.unproject(l, t, z_left),
+                camera.unproject(r, t, z_right),
+                camera.unproject(r, b, z_right),
+                camera.unproject(l, b, z_left),
+            ]
+        };
+        let quad = [[0, 1, 2], [0, 2, 3]];
+        let mut buffer = DepthBuffer::default();
+        buffer.draw(&camera, &plane(2.0, 2.0), &quad, 1, false);
+        // Tilted: from 3 m on the left to 1 m on the right; inverse depth is linear across
+        // the image, so it is at 2 m a quarter of the way (column 159.5).
+        buffer.draw(&camera, &plane(3.0, 1.0), &quad, 2, false);
+        assert!(buffer.label.iter().all(|&l| l != 0));
+        assert_eq!(buffer.label[PIXELS - 1], 2);
+        for j in [0, HEIGHT / 2, HEIGHT - 1] {
+            for i in 0..WIDTH {
+                let k = j * WIDTH + i;
+                let tilted = 1.0 / buffer.inverse_z[k] < 2.0;
+                let expected = if tilted { 2 } else { 1 };
+                assert_eq!(buffer.label[k], expected, "({i}, {j})");
+                assert_eq!(tilted, (i as f32) > WIDTH as f32 / 4.0 - 0.5, "({i}, {j})");
+            }
+        }
     }
 
     /// The same quad cut into 40x40 small triangles (filled pixel by pixel) and into two

@@ -12,6 +12,8 @@
 //! shadow, out of range) a `NaN` raw value: the reading is then `NaN`, outside the raw scale,
 //! and the pixel reads nothing, without a branch.
 
+use multiversion::multiversion;
+
 use super::NoiseSettings;
 use super::edges::{JUMP, SHADOW, THIN};
 use super::spans::Spans;
@@ -184,8 +186,29 @@ impl NoiseTables {
     pub fn coefficients(
         &self,
         n: NoiseSettings,
-        (iz, normal_dot_ray, flags): (&[f32], &[f32], &[u8]),
+        images: (&[f32], &[f32], &[u8]),
         spans: Option<&Spans>,
+        out: &mut Coefficients,
+    ) {
+        let all;
+        let spans = match spans {
+            Some(spans) => spans,
+            None => {
+                all = Spans::all();
+                &all
+            }
+        };
+        coefficients_of(self, n, images, spans, out);
+    }
+
+    /// [`Self::coefficients`] of the pixels of `spans`, inlined into each of
+    /// [`coefficients_of`]'s versions.
+    #[inline(always)]
+    fn coefficients_inlined(
+        &self,
+        n: NoiseSettings,
+        (iz, normal_dot_ray, flags): (&[f32], &[f32], &[u8]),
+        spans: &Spans,
         out: &mut Coefficients,
     ) {
         let cos2_limit = GRAZING_LIMIT.cos().powi(2);
@@ -199,8 +222,11 @@ impl NoiseTables {
         let mut level = [0u8; WIDTH];
         let mut grazing = [0f32; WIDTH];
         let mut axial = [0f32; WIDTH];
-        // The pixels `lo..hi` of row `j`, over slices (no index tests per pixel).
-        let mut row = |j: usize, lo: usize, hi: usize| {
+        // Row by row, the pixels `lo..hi` of row `j`, over slices (no index tests per pixel).
+        // (A loop, not a closure called per row: a closure is compiled on its own, without
+        // the instruction set of the version it is called from.)
+        for (j, r) in spans.iter() {
+            let (lo, hi) = (r.start, r.end);
             let (a, b) = (j * WIDTH + lo, j * WIDTH + hi);
             let p = padded(j * WIDTH);
             let (iz, normal_dot_ray, flags) = (&iz[a..b], &normal_dot_ray[a..b], &flags[a..b]);
@@ -265,28 +291,8 @@ impl NoiseTables {
                 let jump = if f & JUMP != 0 { BESIDE_JUMP } else { 0 };
                 *class = if lost { 0 } else { level | jump };
             }
-        };
-        match spans {
-            None => {
-                for j in 0..HEIGHT {
-                    row(j, 0, WIDTH);
-                }
-                let mut all = Spans::empty();
-                all.add(0, 0, WIDTH);
-                all.add(HEIGHT - 1, 0, WIDTH);
-                for j in 0..HEIGHT {
-                    all.add(j, 0, 1);
-                    all.add(j, WIDTH - 1, WIDTH);
-                }
-                out.pad(&all);
-            }
-            Some(spans) => {
-                for (j, r) in spans.iter() {
-                    row(j, r.start, r.end);
-                }
-                out.pad(spans);
-            }
         }
+        out.pad(spans);
     }
 
     /// One frame's readings: per pixel, from its hash in the frame's `stream`, the coin of a
@@ -299,6 +305,18 @@ impl NoiseTables {
         stream: u64,
         out_raw: &mut [u16],
         out_mm: &mut [u16],
+    ) {
+        readings_of(self, n, c, stream, (out_raw, out_mm));
+    }
+
+    /// [`Self::readings`], inlined into each of [`readings_of`]'s versions.
+    #[inline(always)]
+    fn readings_inlined(
+        &self,
+        n: NoiseSettings,
+        c: &Coefficients,
+        stream: u64,
+        (out_raw, out_mm): (&mut [u16], &mut [u16]),
     ) {
         let offsets = if n.lateral {
             &self.lateral_offsets
@@ -323,6 +341,7 @@ impl NoiseTables {
         // reads in the same loop.
         let mut row = Row {
             hashes: [0; WIDTH],
+            entry: [0; WIDTH],
             seen: [0.0; WIDTH],
             normal: [0.0; WIDTH],
         };
@@ -339,6 +358,7 @@ impl NoiseTables {
                 hashes,
                 seen,
                 normal,
+                ..
             } = &row;
             if !n.quantise {
                 for i in 0..WIDTH {
@@ -378,6 +398,7 @@ impl NoiseTables {
 impl NoiseTables {
     /// Row `j`'s hashes, and per pixel the surface its lateral error lands on and its
     /// normal sample (table reads only).
+    #[inline(always)]
     fn sample_row(
         &self,
         offsets: &[[i16; LATERAL_ENTRIES]; LATERAL_LEVELS],
@@ -390,23 +411,30 @@ impl NoiseTables {
         // A pixel's hash: its column's (drawn once) with the row's salt, mixed by one
         // multiply-xorshift round (cheaper than hashing the pixel's index afresh).
         let salt = splitmix64(stream ^ j as u64) as u32;
-        for (h, &column) in row.hashes.iter_mut().zip(self.columns.iter()) {
+        // With it, the entry of its lateral offset in the table of its σ level (the level's
+        // table, then the hash's low bits): worked out here, where the compiler vectorises,
+        // the table reads below take one load each.
+        let hashes = row.hashes.iter_mut().zip(&mut row.entry);
+        for ((h, entry), (&column, &class)) in hashes.zip(self.columns.iter().zip(class)) {
             let x = column ^ salt;
             let x = (x ^ (x >> 16)).wrapping_mul(0x7feb_352d);
             *h = x ^ (x >> 15);
+            let level = u32::from(class) % LATERAL_LEVELS as u32;
+            *entry = level * LATERAL_ENTRIES as u32 + (*h % LATERAL_ENTRIES as u32);
         }
         // The pixel read is `dj` rows and `di` columns away (clamped to the image by the
         // source's border).
         let p = padded(j * WIDTH);
+        let offsets = offsets.as_flattened();
         let pixels = row
             .hashes
             .iter()
-            .zip(class)
+            .zip(&row.entry)
             .zip(row.seen.iter_mut().zip(row.normal.iter_mut()))
             .enumerate();
-        for (i, ((&h, &class), (seen, normal))) in pixels {
-            let table = &offsets[usize::from(class) % LATERAL_LEVELS];
-            let s = (p + i).wrapping_add_signed(isize::from(table[(h & 0x3ff) as usize]));
+        for (i, ((&h, &entry), (seen, normal))) in pixels {
+            let offset = offsets[entry as usize % (LATERAL_LEVELS * LATERAL_ENTRIES)];
+            let s = (p + i).wrapping_add_signed(isize::from(offset));
             // (The offsets stay within the border: `s` is in the padded image.)
             *seen = c.source[s % SOURCE_LEN];
             *normal = self.normals[(h >> 21) as usize % NORMALS];
@@ -414,9 +442,36 @@ impl NoiseTables {
     }
 }
 
+/// [`NoiseTables::coefficients`] compiled for AVX2 + FMA and for any x86-64, chosen at run
+/// time (see [`super::raster`]'s `draw_mesh`).
+#[multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+popcnt+f16c+movbe"))]
+fn coefficients_of(
+    tables: &NoiseTables,
+    n: NoiseSettings,
+    images: (&[f32], &[f32], &[u8]),
+    spans: &Spans,
+    out: &mut Coefficients,
+) {
+    tables.coefficients_inlined(n, images, spans, out);
+}
+
+/// [`NoiseTables::readings`] compiled for AVX2 + FMA and for any x86-64, chosen at run time.
+#[multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+popcnt+f16c+movbe"))]
+fn readings_of(
+    tables: &NoiseTables,
+    n: NoiseSettings,
+    c: &Coefficients,
+    stream: u64,
+    out: (&mut [u16], &mut [u16]),
+) {
+    tables.readings_inlined(n, c, stream, out);
+}
+
 /// A row's draws ([`NoiseTables::sample_row`]).
 struct Row {
     hashes: [u32; WIDTH],
+    /// Per pixel, its entry in the flattened table of lateral offsets.
+    entry: [u32; WIDTH],
     seen: [f32; WIDTH],
     normal: [f32; WIDTH],
 }

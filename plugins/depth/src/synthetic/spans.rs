@@ -29,6 +29,13 @@ impl Spans {
         }
     }
 
+    /// Every pixel.
+    pub fn all() -> Self {
+        Self {
+            rows: vec![(0, WIDTH as u16); HEIGHT],
+        }
+    }
+
     pub fn clear(&mut self) {
         self.rows.fill(NONE);
     }
