@@ -8,7 +8,7 @@ use fitroom_depth::synthetic::{Label, Scene, SceneMesh, SyntheticFrame};
 use fitroom_depth::truth::{FrameTruth, runs_of};
 use fitroom_garment::plugin::WornGarment;
 use fitroom_sensor::KinectJoint;
-use fitroom_tracker::kinect::{HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
+use fitroom_tracker::kinect::{JOINT_BONES, head_joint};
 use glam::Affine3A;
 
 /// The back wall's distance from the sensor, metres (inside the 4 m range, so the camera
@@ -113,8 +113,7 @@ pub fn avatar_kinect_joints(world: &mut World) -> Option<Vec<Vec3>> {
     for (joint, bone) in JOINT_BONES {
         let mut p = *by_name.get(bone)?;
         if joint == KinectJoint::Head {
-            let neck = *by_name.get("neck_01")?;
-            p += (p - neck).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
+            p = head_joint(p, *by_name.get("neck_01")?);
         }
         out.push(to_sensor.transform_point3(p));
     }

@@ -34,10 +34,15 @@ pub const JOINT_BONES: [(KinectJoint, &str); 20] = [
 /// head's centre) sits, along the neck's direction, metres.
 pub const HEAD_ABOVE_SKULL_BASE_M: f32 = 0.09;
 
+/// The Kinect's head joint from the skull's base (the head bone's head) and the neck's base
+/// (`neck_01`'s head): [`HEAD_ABOVE_SKULL_BASE_M`] above the skull's base along the neck.
+pub fn head_joint(skull_base: Vec3, neck_base: Vec3) -> Vec3 {
+    skull_base + (skull_base - neck_base).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M
+}
+
 /// The 20 Kinect joints of a posed rig (`globals`: its bones' transforms, as
 /// `forward_kinematics` gives them) in the rig's space: each at its bone's head
-/// ([`JOINT_BONES`]), the head's centre [`HEAD_ABOVE_SKULL_BASE_M`] above the skull's base
-/// along the neck. A bone the rig lacks puts its joint at the pelvis.
+/// ([`JOINT_BONES`]), the head's centre [`head_joint`]. A bone the rig lacks puts its joint at the pelvis.
 pub fn rig_joints(model: &BodyModel, globals: &[RigidTransform]) -> [Vec3; KinectJoint::COUNT] {
     let at = |name: &str| {
         model
@@ -49,11 +54,11 @@ pub fn rig_joints(model: &BodyModel, globals: &[RigidTransform]) -> [Vec3; Kinec
     let head = |name: &str| at(name).unwrap_or(pelvis);
     let mut joints = [Vec3::ZERO; KinectJoint::COUNT];
     for (joint, bone) in JOINT_BONES {
-        let mut p = head(bone);
-        if joint == KinectJoint::Head {
-            p += (p - head("neck_01")).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
-        }
-        joints[joint.index()] = p;
+        joints[joint.index()] = if joint == KinectJoint::Head {
+            head_joint(head(bone), head("neck_01"))
+        } else {
+            head(bone)
+        };
     }
     joints
 }

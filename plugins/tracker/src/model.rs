@@ -13,7 +13,7 @@ use fitroom_sensor::KinectJoint;
 use glam::{Affine3A, Quat, Vec3};
 use serde::Serialize;
 
-use crate::kinect::{DRIVER_BONES, HEAD_ABOVE_SKULL_BASE_M, JOINT_BONES};
+use crate::kinect::{DRIVER_BONES, JOINT_BONES, head_joint};
 use crate::surface::BoneSurface;
 
 /// How a tracked bone may turn relative to its parent.
@@ -303,7 +303,7 @@ impl TrackBody {
             let mut local = Vec3::ZERO;
             if *joint == KinectJoint::Head {
                 let neck = rest.heads[bone("neck_01")?];
-                let up = (rest.heads[b] - neck).normalize_or_zero() * HEAD_ABOVE_SKULL_BASE_M;
+                let up = head_joint(rest.heads[b], neck) - rest.heads[b];
                 local = globals[b].rotation.inverse() * up;
             }
             kinect[k] = (b, local);
