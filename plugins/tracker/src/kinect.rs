@@ -32,7 +32,7 @@ pub const JOINT_BONES: [(KinectJoint, &str); 20] = [
 
 /// How far above the head bone's head (the skull's base) the Kinect's head joint (the
 /// head's centre) sits, along the neck's direction, metres.
-pub const HEAD_ABOVE_SKULL_BASE_M: f32 = 0.09;
+const HEAD_ABOVE_SKULL_BASE_M: f32 = 0.09;
 
 /// The Kinect's head joint from the skull's base (the head bone's head) and the neck's base
 /// (`neck_01`'s head): [`HEAD_ABOVE_SKULL_BASE_M`] above the skull's base along the neck.
@@ -42,7 +42,8 @@ pub fn head_joint(skull_base: Vec3, neck_base: Vec3) -> Vec3 {
 
 /// The 20 Kinect joints of a posed rig (`globals`: its bones' transforms, as
 /// `forward_kinematics` gives them) in the rig's space: each at its bone's head
-/// ([`JOINT_BONES`]), the head's centre [`head_joint`]. A bone the rig lacks puts its joint at the pelvis.
+/// ([`JOINT_BONES`]), the head at the head's centre ([`head_joint`]). A bone the rig lacks
+/// puts its joint at the pelvis.
 pub fn rig_joints(model: &BodyModel, globals: &[RigidTransform]) -> [Vec3; KinectJoint::COUNT] {
     let at = |name: &str| {
         model

@@ -27,6 +27,8 @@ use crate::silhouette::Silhouette;
 const SIZE_EVERY: usize = 15;
 const SIZE_FRAMES: usize = 90;
 const SIZE_QUANTILE: f32 = 0.8;
+/// The body's scale is kept within these (a person 0.75 to 1.3 times the body's height).
+const SIZE_LIMITS: (f32, f32) = (0.75, 1.3);
 
 /// How the tracker runs.
 #[derive(Clone, Copy, Debug)]
@@ -352,7 +354,7 @@ impl Tracker {
         let mut sorted = self.sizing.clone();
         sorted.sort_by(f32::total_cmp);
         let at = ((sorted.len() - 1) as f32 * SIZE_QUANTILE).round() as usize;
-        let size = sorted[at].clamp(0.75, 1.3);
+        let size = sorted[at].clamp(SIZE_LIMITS.0, SIZE_LIMITS.1);
         // Grown about the soles, which stay where they are.
         let sole = Vec3::Y * self.body.sole_y;
         pose.translation += pose.rotation * (sole * (pose.scale - size));
@@ -543,7 +545,7 @@ impl Tracker {
                 let seen = self
                     .body
                     .rest_seen_top(spot(top / self.body.height_m), floor.normal);
-                let s = (top / seen).clamp(0.75, 1.3);
+                let s = (top / seen).clamp(SIZE_LIMITS.0, SIZE_LIMITS.1);
                 self.scale = Some(s);
                 s
             }

@@ -4,8 +4,6 @@
 //! only some pixels' depths changed (a person moving in front of a still room), over the
 //! pixels those can affect ([`mark_edges_in`], [`mark_shadow_in`]), with the same result.
 
-use multiversion::multiversion;
-
 use super::spans::Spans;
 use crate::camera::{DepthCamera, HEIGHT, PIXELS, WIDTH};
 
@@ -101,11 +99,10 @@ fn edge_bits(l: u8, r: u8, u: u8, d: u8) -> u8 {
     if thin != 0 { THIN } else { jump }
 }
 
+for_this_cpu! {
 /// [`mark_edges`] over the pixels of `spans` only (their [`SHADOW`] bits kept): the same
 /// flags as a pass over the whole image where `spans` holds every pixel whose depth changed
-/// and its neighbours. Compiled for AVX2 and for any x86-64, chosen at run time (see
-/// [`super::raster`]'s `draw_mesh`).
-#[multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+popcnt+f16c+movbe"))]
+/// and its neighbours.
 pub(crate) fn mark_edges_in(iz: &[f32], spans: &Spans, flags: &mut [u8]) {
     for (j, r) in spans.iter() {
         if j == 0 || j + 1 >= HEIGHT {
@@ -119,6 +116,7 @@ pub(crate) fn mark_edges_in(iz: &[f32], spans: &Spans, flags: &mut [u8]) {
             flags[k] = (flags[k] & SHADOW) | edge_bits(l, r, u, d);
         }
     }
+}
 }
 
 /// The projector looks along the same axis from `b` to the sensor's right with the same

@@ -10,7 +10,6 @@
 //! A mesh marked closed skips the triangles facing away from the camera.
 
 use glam::{Vec2, Vec3, Vec4};
-use multiversion::multiversion;
 
 use super::spans::Spans;
 use crate::camera::{DepthCamera, HEIGHT, PIXELS, WIDTH};
@@ -321,9 +320,11 @@ impl DepthBuffer {
             // (glam's `Vec4` is four SSE lanes: its comparisons and selects are masks, which
             // the compiler cannot turn back into branches.)
             let (z4, d4) = (Vec4::from_slice(z), Vec4::from_slice(d));
-            let (a, b) = (iz, iz + iz_dx);
-            let (c, e) = (b + iz_dx, b + iz_dx + iz_dx);
-            let iz4 = Vec4::new(a, b, c, e);
+            // (Stepped one pixel at a time, as the scalar loop does: the same depths.)
+            let b = iz + iz_dx;
+            let c = b + iz_dx;
+            let e = c + iz_dx;
+            let iz4 = Vec4::new(iz, b, c, e);
             let nearer = iz4.cmpgt(z4) & LANE.cmplt(Vec4::splat(left as f32));
             Vec4::select(nearer, iz4, z4).write_to_slice(z);
             Vec4::select(nearer, iz4 * distance, d4).write_to_slice(d);
@@ -341,11 +342,8 @@ impl DepthBuffer {
     }
 }
 
-/// [`DepthBuffer::draw`] compiled for the instruction set of x86-64 CPUs since 2013 (AVX2,
-/// FMA: x86-64-v3) and for any x86-64, the one the CPU runs chosen when first called (the
-/// `multiversion` crate). Measured on the dressed frame: 10-15 % faster, with the other
-/// passes so compiled ([`crate::synthetic`]).
-#[multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+popcnt+f16c+movbe"))]
+for_this_cpu! {
+/// [`DepthBuffer::draw`], in a version for this CPU (`for_this_cpu!`).
 fn draw_mesh(
     buffer: &mut DepthBuffer,
     camera: &DepthCamera,
@@ -354,6 +352,7 @@ fn draw_mesh(
     closed: bool,
 ) {
     buffer.draw_inlined(camera, mesh, label, closed);
+}
 }
 
 /// Pixels [`DepthBuffer::fill`] takes at a time.

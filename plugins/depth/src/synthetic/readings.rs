@@ -12,8 +12,6 @@
 //! shadow, out of range) a `NaN` raw value: the reading is then `NaN`, outside the raw scale,
 //! and the pixel reads nothing, without a branch.
 
-use multiversion::multiversion;
-
 use super::NoiseSettings;
 use super::edges::{JUMP, SHADOW, THIN};
 use super::spans::Spans;
@@ -442,9 +440,8 @@ impl NoiseTables {
     }
 }
 
-/// [`NoiseTables::coefficients`] compiled for AVX2 + FMA and for any x86-64, chosen at run
-/// time (see [`super::raster`]'s `draw_mesh`).
-#[multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+popcnt+f16c+movbe"))]
+for_this_cpu! {
+/// [`NoiseTables::coefficients`], in a version for this CPU (`for_this_cpu!`).
 fn coefficients_of(
     tables: &NoiseTables,
     n: NoiseSettings,
@@ -454,9 +451,10 @@ fn coefficients_of(
 ) {
     tables.coefficients_inlined(n, images, spans, out);
 }
+}
 
-/// [`NoiseTables::readings`] compiled for AVX2 + FMA and for any x86-64, chosen at run time.
-#[multiversion(targets("x86_64+avx+avx2+fma+bmi1+bmi2+lzcnt+popcnt+f16c+movbe"))]
+for_this_cpu! {
+/// [`NoiseTables::readings`], in a version for this CPU (`for_this_cpu!`).
 fn readings_of(
     tables: &NoiseTables,
     n: NoiseSettings,
@@ -465,6 +463,7 @@ fn readings_of(
     out: (&mut [u16], &mut [u16]),
 ) {
     tables.readings_inlined(n, c, stream, out);
+}
 }
 
 /// A row's draws ([`NoiseTables::sample_row`]).
