@@ -9,7 +9,9 @@
 //!    deep, and enough pixels for its distance;
 //! 4. of the people, the one who overlaps the last frame's person most is kept (so someone
 //!    walking behind does not take over); without one, the person nearest the centre of the
-//!    interaction area.
+//!    interaction area;
+//! 5. the parts of that person a depth edge cut off (the far arm seen past their back, a
+//!    hand held out) are added to them (module `parts`).
 //!
 //! The result is the user map the Kinect SDK gave seed 000 (libfreenect has none).
 
@@ -21,6 +23,7 @@ use serde::Serialize;
 use crate::floor::{FloorSettings, Plane, fit_floor, floor_samples_into};
 
 mod components;
+mod parts;
 
 use components::Components;
 
@@ -38,6 +41,9 @@ pub struct SegmentSettings {
     pub centre_z_m: f32,
     /// Least visible frontal area of a person, m² (a person standing is about 0.6 m²).
     pub min_area_m2: f32,
+    /// Whether parts of the person a depth edge cut off (an arm seen past their back, a
+    /// hand held out) are added to them (module `parts`).
+    pub join_parts: bool,
 }
 
 impl Default for SegmentSettings {
@@ -49,6 +55,7 @@ impl Default for SegmentSettings {
             centre_x_m: 0.0,
             centre_z_m: 2.5,
             min_area_m2: 0.08,
+            join_parts: true,
         }
     }
 }
@@ -171,6 +178,25 @@ impl Stats {
         self.top_m > MAX_CUT_TOP_M && self.top_row_pixels * 10 > width * 9
     }
 
+    /// Takes in `part`'s pixels (not its border counts or overlap, used before).
+    fn add(&mut self, part: &Stats) {
+        self.pixels += part.pixels;
+        self.sum += part.sum;
+        self.area_m2 += part.area_m2;
+        self.min = self.min.min(part.min);
+        self.max = self.max.max(part.max);
+        self.top_m = self.top_m.max(part.top_m);
+        self.bottom_m = self.bottom_m.min(part.bottom_m);
+        self.touches_bottom_row |= part.touches_bottom_row;
+        self.top_row_pixels += part.top_row_pixels;
+        self.bbox = [
+            self.bbox[0].min(part.bbox[0]),
+            self.bbox[1].min(part.bbox[1]),
+            self.bbox[2].max(part.bbox[2]),
+            self.bbox[3].max(part.bbox[3]),
+        ];
+    }
+
     /// A person stands in front of what surrounds them; a surface seen between nearer ones
     /// (a strip of the back wall beside a person standing close to the camera) is not one.
     fn mostly_behind(&self) -> bool {
@@ -231,13 +257,15 @@ impl Segmenter {
             self.previous = None;
             return None;
         };
-        let c = stats[chosen];
+        let mut c = stats[chosen];
         let chosen = chosen as u32;
+        let runs = &self.scratch.components.runs;
         let mut mask = vec![false; PIXELS];
-        for run in self.scratch.components.runs.iter() {
-            if run.component == chosen {
-                let row = usize::from(run.row) * WIDTH;
-                mask[row + usize::from(run.start)..row + usize::from(run.end)].fill(true);
+        fill(&mut mask, runs, chosen);
+        if s.join_parts {
+            for part in parts::parts_of(chosen, &mask, &frame.depth_mm, runs, stats, &people) {
+                fill(&mut mask, runs, part);
+                c.add(&stats[part as usize]);
             }
         }
         // Kept in the last frame's buffer when there is one (no allocation).
@@ -408,7 +436,14 @@ impl Segmenter {
     }
 }
 
-/// The sum of `values`, in eight interleaved partial sums (so that it vectorises).
+/// Sets the pixels of `component`'s runs in `mask`.
+fn fill(mask: &mut [bool], runs: &[components::Run], component: u32) {
+    for run in runs.iter().filter(|r| r.component == component) {
+        let row = usize::from(run.row) * WIDTH;
+        mask[row + usize::from(run.start)..row + usize::from(run.end)].fill(true);
+    }
+}
+
 /// Counts, for the runs of one row, where two components border each other (next to each
 /// other, or with only pixels without a reading between them) and which is the nearer.
 fn border(raw_mm: &[u16], depth: &[f32], runs: &[components::Run], stats: &mut [Stats]) {
@@ -433,6 +468,7 @@ fn border(raw_mm: &[u16], depth: &[f32], runs: &[components::Run], stats: &mut [
     }
 }
 
+/// The sum of `values`, in eight interleaved partial sums (so that it vectorises).
 fn sum(values: &[f32]) -> f32 {
     let mut lanes = [0.0; 8];
     let chunks = values.chunks_exact(8);

@@ -5,6 +5,8 @@
 
 use std::path::Path;
 
+mod common;
+
 use fitroom_body::BodyModel;
 use fitroom_depth::synthetic::{
     Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, SyntheticFrame,
@@ -196,4 +198,72 @@ fn garbage_frames_give_no_person_and_no_panic() {
     for frame in [&zeros, &none, &garbage] {
         assert!(segmenter.segment(frame).is_none());
     }
+}
+
+#[test]
+fn the_far_arm_seen_past_the_back_is_the_persons() {
+    // Turned halfway to the side, the arms a little away from the body (the calibration's
+    // second view): the far arm shows past the back, 20-30 cm deeper than the body beside
+    // it, its shoulder hidden, so the labelling makes it a component of its own.
+    let body = common::body();
+    let arms: common::Turns = &[
+        ("upperarm_l", Vec3::Z, -15.0),
+        ("upperarm_r", Vec3::Z, 15.0),
+    ];
+    let spot = Vec3::new(0.0, -SENSOR_HEIGHT, 2.7);
+    let mut worst = (f32::INFINITY, f32::INFINITY);
+    for (seed, yaw) in [(11u64, 45f32), (12, -50.0), (13, 60.0)] {
+        let (skin, _) = body.posed(&body.locals(arms, 1.0), spot);
+        let turn = Quat::from_rotation_y(yaw.to_radians());
+        let skin = skin.into_iter().map(|p| spot + turn * (p - spot)).collect();
+        let mut scene = room();
+        scene.meshes.push(SceneMesh {
+            positions: skin,
+            triangles: body.model.triangles.clone(),
+            label: Label::Body,
+            closed: true,
+        });
+        let frame = camera(seed).render(&scene, 0.0);
+        let segment = |join_parts| {
+            let settings = SegmentSettings {
+                join_parts,
+                ..SegmentSettings::default()
+            };
+            let found = Segmenter::new(settings)
+                .segment(&frame.frame)
+                .expect("a person");
+            score_above_feet(&frame, &found.mask)
+        };
+        let ((precision, recall), (_, without)) = (segment(true), segment(false));
+        println!(
+            "turned {yaw}°: precision {precision:.4}, recall {recall:.4} ({without:.4} without the parts)"
+        );
+        assert!(precision > 0.99, "turned {yaw}°: precision {precision}");
+        worst = (worst.0.min(recall), worst.1.min(without));
+    }
+    assert!(worst.0 > 0.98, "recall {}", worst.0);
+    // The scenes do show the case: without the parts, an arm is missing.
+    assert!(worst.1 < worst.0 - 0.03, "{worst:?}");
+}
+
+/// [`score`] over the pixels above the feet (the floor band takes the soles: not the case
+/// tested).
+fn score_above_feet(frame: &SyntheticFrame, mask: &[bool]) -> (f32, f32) {
+    let camera = frame.frame.camera;
+    let above: Vec<bool> = (0..PIXELS)
+        .map(|k| {
+            let z = f32::from(frame.frame.depth_mm[k]) * 0.001;
+            let p = camera.unproject((k % 640) as f32, (k / 640) as f32, z);
+            p.y > -SENSOR_HEIGHT + 0.15
+        })
+        .collect();
+    let kept: Vec<bool> = (0..PIXELS).map(|k| mask[k] && above[k]).collect();
+    let mut truth_above = frame.clone();
+    truth_above.labels = (0..PIXELS)
+        .map(|k| match above[k] {
+            true => frame.labels[k],
+            false => Label::Other as u8,
+        })
+        .collect();
+    score(&truth_above, &kept)
 }

@@ -1,0 +1,133 @@
+//! Parts of the person that a depth edge cut off from the rest of them. Turned to the side,
+//! the far arm hangs behind the body: its shoulder is hidden, and where it shows past the
+//! back it lies tens of centimetres deeper than the body beside it, so the labelling makes
+//! it a component of its own; a hand held out towards the sensor can part from the arm the
+//! same way. Such a component borders the person in the image, is small, lies within the
+//! person's depth (give or take an arm), and does not stand on the floor (a box or a chair
+//! beside them does; a second person, behind, is a person of their own and much deeper).
+//!
+//! Without them the tracker saw no far arm (its fit left the arm where the last frame had
+//! it) and the measurement lost a thousand pixels of the turned view.
+
+use fitroom_depth::{HEIGHT, WIDTH};
+
+use super::Stats;
+use super::components::Run;
+
+/// A part has at least this many pixels: slivers (the neck under the chin, a few pixels
+/// cut off by the edge's noise) tell the tracker little.
+const MIN_PIXELS: usize = 40;
+/// A part is smaller than this (frontal area), m²: an arm is about 0.07 m² at 2.5 m.
+const MAX_AREA_M2: f32 = 0.2;
+/// A part lies at most this much deeper than the person's deepest reading, metres (an arm
+/// hanging behind a body turned sideways; a second person passing behind is farther).
+const BEHIND_M: f32 = 0.4;
+/// ... and at most this much nearer than their nearest one (a hand held out), metres.
+const IN_FRONT_M: f32 = 0.6;
+/// A part's lowest point is at least this high above the floor, metres: what stands on
+/// the floor beside the person is not theirs.
+const ABOVE_FLOOR_M: f32 = 0.15;
+/// A part reaches at most this far beside the person, sensor x, metres.
+const REACH_M: f32 = 0.9;
+/// Pixels without a reading bridged between a part and the person (the projector's
+/// shadow falls beside a depth edge).
+const GAP_PX: usize = 4;
+/// A part borders the person along at least this many of its pixels.
+const MIN_TOUCH: usize = 4;
+
+/// The components (numbers of `runs`) that are parts of the `person` component, whose
+/// pixels are `mask`; `people` are the other components that look like people themselves.
+pub(super) fn parts_of(
+    person: u32,
+    mask: &[bool],
+    raw_mm: &[u16],
+    runs: &[Run],
+    stats: &[Stats],
+    people: &[usize],
+) -> Vec<u32> {
+    let Some(p) = stats.get(person as usize) else {
+        return Vec::new();
+    };
+    let candidate: Vec<bool> = stats
+        .iter()
+        .enumerate()
+        .map(|(c, s)| {
+            c != 0
+                && c != person as usize
+                && !people.contains(&c)
+                && !s.too_large
+                && s.pixels >= MIN_PIXELS
+                && s.area_m2 <= MAX_AREA_M2
+                && s.bottom_m >= ABOVE_FLOOR_M
+                && s.min.z >= p.min.z - IN_FRONT_M
+                && s.max.z <= p.max.z + BEHIND_M
+                && s.min.x >= p.min.x - REACH_M
+                && s.max.x <= p.max.x + REACH_M
+        })
+        .collect();
+    if !candidate.contains(&true) {
+        return Vec::new();
+    }
+    let mut touches = vec![0usize; stats.len()];
+    for run in runs {
+        let c = run.component as usize;
+        if !candidate[c] || touches[c] >= MIN_TOUCH {
+            continue;
+        }
+        let (row, start, end) = (
+            usize::from(run.row),
+            usize::from(run.start),
+            usize::from(run.end),
+        );
+        let mut touching = 0;
+        for col in start..end {
+            let ends = [(col == start, Step::Left), (col + 1 == end, Step::Right)];
+            let sideways = ends.iter().filter(|(at, _)| *at).map(|(_, s)| *s);
+            touching += [Step::Up, Step::Down]
+                .into_iter()
+                .chain(sideways)
+                .filter(|&step| reaches_person(mask, raw_mm, row, col, step))
+                .count()
+                .min(1);
+        }
+        touches[c] += touching;
+    }
+    (1..stats.len())
+        .filter(|&c| candidate[c] && touches[c] >= MIN_TOUCH)
+        .map(|c| c as u32)
+        .collect()
+}
+
+#[derive(Clone, Copy)]
+enum Step {
+    Left,
+    Right,
+    Up,
+    Down,
+}
+
+/// Whether, from pixel (`row`, `col`) one `step` at a time, the person's pixels are reached
+/// across at most [`GAP_PX`] pixels without a reading.
+fn reaches_person(mask: &[bool], raw_mm: &[u16], row: usize, col: usize, step: Step) -> bool {
+    let (mut r, mut c) = (row, col);
+    for _ in 0..=GAP_PX {
+        let next = match step {
+            Step::Left => c.checked_sub(1).map(|c| (r, c)),
+            Step::Right => (c + 1 < WIDTH).then_some((r, c + 1)),
+            Step::Up => r.checked_sub(1).map(|r| (r, c)),
+            Step::Down => (r + 1 < HEIGHT).then_some((r + 1, c)),
+        };
+        let Some(at) = next else {
+            return false;
+        };
+        (r, c) = at;
+        let k = r * WIDTH + c;
+        if mask[k] {
+            return true;
+        }
+        if raw_mm[k] > 0 {
+            return false;
+        }
+    }
+    false
+}
