@@ -15,7 +15,7 @@ use crate::view::CalibrationFrame;
 /// What the person is asked to do for the turned view.
 pub const TURN_HINT: &str = "Now turn halfway to your left and hold still";
 
-/// The joints that say whether a turned person stands still.
+/// The joints that say whether a person stands still (turned, the only ones judged).
 const TRUNK: [KinectJoint; 4] = [
     KinectJoint::HipCenter,
     KinectJoint::Spine,
@@ -35,8 +35,14 @@ pub struct CollectSettings {
     pub views: usize,
     /// The turned view's turn from the front one, degrees: at least, at most.
     pub turn_deg: (f32, f32),
-    /// Largest move of a joint over a view's frames, metres: more is not standing still.
+    /// Largest move of a trunk joint over a view's frames, metres: more is not standing
+    /// still.
     pub still_m: f32,
+    /// The same for the limbs' joints (judged facing the camera only), metres. Larger: on a
+    /// person standing still the tracker's hands, elbows and feet wander by up to 5 cm (a
+    /// hand cut off from its arm by a depth edge in one frame and not the next moves the
+    /// arm), and at the trunk's 5 cm the view restarted again and again.
+    pub still_limbs_m: f32,
 }
 
 impl Default for CollectSettings {
@@ -46,6 +52,7 @@ impl Default for CollectSettings {
             views: 2,
             turn_deg: (25.0, 75.0),
             still_m: 0.05,
+            still_limbs_m: 0.10,
         }
     }
 }
@@ -194,11 +201,14 @@ impl Collector {
                 } else {
                     &TRUNK
                 };
+                let limit = |j: &KinectJoint| match TRUNK.contains(j) {
+                    true => self.settings.still_m,
+                    false => self.settings.still_limbs_m,
+                };
                 let moved = judged
                     .iter()
-                    .map(|j| f.joints[j.index()].distance(reference[j.index()]))
-                    .fold(0.0, f32::max);
-                if moved > self.settings.still_m {
+                    .any(|j| f.joints[j.index()].distance(reference[j.index()]) > limit(j));
+                if moved {
                     return self.restart_view("Please stand still for a second");
                 }
             }
