@@ -201,9 +201,12 @@ impl Collector {
                 } else {
                     &TRUNK
                 };
-                let limit = |j: &KinectJoint| match TRUNK.contains(j) {
-                    true => self.settings.still_m,
-                    false => self.settings.still_limbs_m,
+                let limit = |j: &KinectJoint| {
+                    if TRUNK.contains(j) {
+                        self.settings.still_m
+                    } else {
+                        self.settings.still_limbs_m
+                    }
                 };
                 let moved = judged
                     .iter()

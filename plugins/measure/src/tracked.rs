@@ -44,8 +44,9 @@ pub fn tracked_placement(tracked: &Tracked) -> Placement {
     }
 }
 
-/// `rotation` (model to sensor space) turned the least way that stands the model's up (+Y)
-/// along `up`, keeping its heading: its forward (+Z) laid flat on the floor. Returns
+/// `rotation` (model to sensor space) stood upright: the model's up (+Y) along `up`, its
+/// forward (+Z) the old forward's shadow on the floor (the heading kept; the least turn,
+/// `Quat::from_rotation_arc`, would swing the heading by part of a sideways lean). Returns
 /// `rotation` when either is degenerate (facing straight up or down, no floor).
 fn upright(rotation: Quat, up: Vec3) -> Quat {
     let up = up.normalize_or_zero();

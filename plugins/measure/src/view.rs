@@ -100,7 +100,7 @@ impl AveragedView {
                 *m += u16::from(is);
             }
         }
-        let third = n.div_ceil(3) as u16;
+        let third = a_third(n);
         let mask: Vec<bool> = masked.iter().map(|&m| m >= third).collect();
         // Each pixel's readings while it saw the person; their robust mean: the readings
         // within OUTLIER_MM of their median. (The sensor's lateral error makes a pixel at
@@ -166,7 +166,7 @@ impl AveragedView {
     /// [`Self::points`] and the pixel each is seen at.
     pub fn points_and_pixels(&self, step: usize) -> (Vec<Vec3>, Vec<(f32, f32)>) {
         let step = step.max(1);
-        let need = (self.frames / 3).max(1) as u16;
+        let need = a_third(self.frames);
         let (mut points, mut pixels) = (Vec::new(), Vec::new());
         for v in (0..HEIGHT).step_by(step) {
             for u in (0..WIDTH).step_by(step) {
@@ -184,4 +184,10 @@ impl AveragedView {
     pub fn joint(&self, j: KinectJoint) -> Vec3 {
         self.joints[j.index()]
     }
+}
+
+/// A third of `frames` (at least one): the frames a pixel must see the person in to be
+/// theirs, and read them in to be a surface point.
+fn a_third(frames: usize) -> u16 {
+    u16::try_from((frames / 3).max(1)).unwrap_or(u16::MAX)
 }

@@ -105,6 +105,8 @@ struct Scratch {
     ends: Vec<[f32; 4]>,
     /// The points the floor is fitted to or checked against.
     floor_samples: Vec<Vec3>,
+    /// The person's parts cut off by a depth edge, with their bordering pixels.
+    parts: Vec<(u32, usize)>,
 }
 
 /// A person is narrower than this (sensor x), metres.
@@ -263,7 +265,9 @@ impl Segmenter {
         let mut mask = vec![false; PIXELS];
         fill(&mut mask, runs, chosen);
         if s.join_parts {
-            for part in parts::parts_of(chosen, &mask, &frame.depth_mm, runs, stats, &people) {
+            let parts = &mut self.scratch.parts;
+            parts::parts_of(chosen, &mask, &frame.depth_mm, runs, stats, &people, parts);
+            for &(part, _) in parts.iter() {
                 fill(&mut mask, runs, part);
                 c.add(&stats[part as usize]);
             }

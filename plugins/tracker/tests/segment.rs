@@ -11,7 +11,7 @@ use fitroom_body::BodyModel;
 use fitroom_depth::synthetic::{
     Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera, SyntheticFrame,
 };
-use fitroom_depth::{DepthCamera, DepthFrame, PIXELS};
+use fitroom_depth::{DepthCamera, DepthFrame, PIXELS, WIDTH};
 use fitroom_tracker::{SegmentSettings, Segmenter};
 use glam::{Quat, Vec3};
 
@@ -253,7 +253,7 @@ fn score_above_feet(frame: &SyntheticFrame, mask: &[bool]) -> (f32, f32) {
     let above: Vec<bool> = (0..PIXELS)
         .map(|k| {
             let z = f32::from(frame.frame.depth_mm[k]) * 0.001;
-            let p = camera.unproject((k % 640) as f32, (k / 640) as f32, z);
+            let p = camera.unproject((k % WIDTH) as f32, (k / WIDTH) as f32, z);
             p.y > -SENSOR_HEIGHT + 0.15
         })
         .collect();

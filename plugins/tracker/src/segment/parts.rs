@@ -35,8 +35,10 @@ const GAP_PX: usize = 4;
 /// A part borders the person along at least this many of its pixels.
 const MIN_TOUCH: usize = 4;
 
-/// The components (numbers of `runs`) that are parts of the `person` component, whose
-/// pixels are `mask`; `people` are the other components that look like people themselves.
+/// Fills `parts` with the components (numbers of `runs`) that are parts of the `person`
+/// component, whose pixels are `mask`, each with the count of its pixels that border the
+/// person (up to [`MIN_TOUCH`]); `people` are the other components that look like people
+/// themselves. (`parts` is the segmenter's scratch: no allocation per frame.)
 pub(super) fn parts_of(
     person: u32,
     mask: &[bool],
@@ -44,58 +46,59 @@ pub(super) fn parts_of(
     runs: &[Run],
     stats: &[Stats],
     people: &[usize],
-) -> Vec<u32> {
+    parts: &mut Vec<(u32, usize)>,
+) {
+    parts.clear();
     let Some(p) = stats.get(person as usize) else {
-        return Vec::new();
+        return;
     };
-    let candidate: Vec<bool> = stats
-        .iter()
-        .enumerate()
-        .map(|(c, s)| {
-            c != 0
-                && c != person as usize
-                && !people.contains(&c)
-                && !s.too_large
-                && s.pixels >= MIN_PIXELS
-                && s.area_m2 <= MAX_AREA_M2
-                && s.bottom_m >= ABOVE_FLOOR_M
-                && s.min.z >= p.min.z - IN_FRONT_M
-                && s.max.z <= p.max.z + BEHIND_M
-                && s.min.x >= p.min.x - REACH_M
-                && s.max.x <= p.max.x + REACH_M
-        })
-        .collect();
-    if !candidate.contains(&true) {
-        return Vec::new();
+    let candidate = |c: usize, s: &Stats| {
+        c != 0
+            && c != person as usize
+            && !people.contains(&c)
+            && !s.too_large
+            && s.pixels >= MIN_PIXELS
+            && s.area_m2 <= MAX_AREA_M2
+            && s.bottom_m >= ABOVE_FLOOR_M
+            && s.min.z >= p.min.z - IN_FRONT_M
+            && s.max.z <= p.max.z + BEHIND_M
+            && s.min.x >= p.min.x - REACH_M
+            && s.max.x <= p.max.x + REACH_M
+    };
+    parts.extend(
+        stats
+            .iter()
+            .enumerate()
+            .filter(|&(c, s)| candidate(c, s))
+            .map(|(c, _)| (c as u32, 0)),
+    );
+    if parts.is_empty() {
+        return;
     }
-    let mut touches = vec![0usize; stats.len()];
+    // Candidates are few (none in most frames): found among them by a look along the list.
     for run in runs {
-        let c = run.component as usize;
-        if !candidate[c] || touches[c] >= MIN_TOUCH {
+        let Some((_, touches)) = parts.iter_mut().find(|(c, _)| *c == run.component) else {
             continue;
-        }
+        };
         let (row, start, end) = (
             usize::from(run.row),
             usize::from(run.start),
             usize::from(run.end),
         );
-        let mut touching = 0;
         for col in start..end {
+            if *touches >= MIN_TOUCH {
+                break;
+            }
             let ends = [(col == start, Step::Left), (col + 1 == end, Step::Right)];
             let sideways = ends.iter().filter(|(at, _)| *at).map(|(_, s)| *s);
-            touching += [Step::Up, Step::Down]
+            let touching = [Step::Up, Step::Down]
                 .into_iter()
                 .chain(sideways)
-                .filter(|&step| reaches_person(mask, raw_mm, row, col, step))
-                .count()
-                .min(1);
+                .any(|step| reaches_person(mask, raw_mm, row, col, step));
+            *touches += usize::from(touching);
         }
-        touches[c] += touching;
     }
-    (1..stats.len())
-        .filter(|&c| candidate[c] && touches[c] >= MIN_TOUCH)
-        .map(|c| c as u32)
-        .collect()
+    parts.retain(|&(_, touches)| touches >= MIN_TOUCH);
 }
 
 #[derive(Clone, Copy)]
