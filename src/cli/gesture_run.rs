@@ -15,7 +15,6 @@ use fitroom_gesture::hand::region::HandJoints;
 use fitroom_gesture::reader::GestureReader;
 use fitroom_gesture::swipe::SwipeDirection;
 use fitroom_gesture::{HandSide, HandState};
-use fitroom_tracker::{Tracker, TrackerSettings};
 use serde::Serialize;
 
 use super::BodyArg;
@@ -57,8 +56,7 @@ pub struct HandOut {
 
 pub fn gesture_run(dump: &Path, body: &BodyArg) -> Result<GestureRunReport> {
     let model = Arc::new(body.load()?);
-    let mut tracker = Tracker::estimating(model, TrackerSettings::default())
-        .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")?;
+    let mut tracker = super::track::tracker(&model)?;
     let hands = HandModel::embedded()?;
     let recording = Recording::open(dump)?;
     let mut reader = GestureReader::new(Some(hands));

@@ -13,6 +13,8 @@ use fitroom_depth::DepthCamera;
 use fitroom_depth::fakenect::Recording;
 use fitroom_depth::truth::read_truth;
 use fitroom_math::stats::Summary;
+use fitroom_measure::ShapePrior;
+use fitroom_measure::build::TrackedBuild;
 use fitroom_sensor::KinectJoint;
 use fitroom_tracker::eval::{EvalReport, Evaluation};
 use fitroom_tracker::{
@@ -282,11 +284,16 @@ fn track_model(body: &BodyArg) -> Result<Arc<BodyModel>> {
     Ok(Arc::new(body.load()?))
 }
 
-/// A tracker for `model`, estimating each person's build as it tracks them (in the frame that
-/// completes its snapshots: the same recording gives the same figures).
-fn tracker(model: &Arc<BodyModel>) -> Result<Tracker> {
-    Tracker::estimating(model.clone(), TrackerSettings::default())
-        .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")
+/// A tracker for `model`, estimating each person's build as it tracks them with the
+/// measurement's body fit, as the kiosk does (in the frame that completes its snapshots: the
+/// same recording gives the same figures).
+pub fn tracker(model: &Arc<BodyModel>) -> Result<Tracker> {
+    let prior = ShapePrior::shipped().context("the shipped shape prior cannot be read")?;
+    Ok(
+        Tracker::estimating(model.clone(), TrackerSettings::default())
+            .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")?
+            .with_build_fit(Arc::new(TrackedBuild::new(Arc::new(prior)))),
+    )
 }
 
 /// Frames of a picture, as shares of the recording.

@@ -23,12 +23,14 @@
 //! - `silhouette`: the distance outside the person's silhouette;
 //! - `fit`: our fit; `prior`: the shape prior it leans on; `person`: both genders tried;
 //! - `tracked`: the tracker's output as calibration input (frames, placement, starting pose);
+//! - `build`: the same fit as the tracker's estimate of a moving person's build;
 //! - `garment_size`: a garment's own size table as a chart (the size recommended);
 //! - `eval`: the evaluation on ANSUR II subjects filmed by the synthetic Kinect (`dressed`:
 //!   wearing a garment);
 //! - `plugin` (feature `plugin`): the Bevy adapter that measures the person while the kiosk
 //!   calibrates.
 
+pub mod build;
 pub mod calibration;
 pub mod eval;
 pub mod fit;

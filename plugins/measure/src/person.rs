@@ -53,7 +53,7 @@ pub fn measure_person(
 }
 
 /// Fits `views` with both priors and keeps the better.
-fn both_genders(
+pub(crate) fn both_genders(
     model: &BodyModel,
     views: &[ViewPose],
     prior: &ShapePrior,

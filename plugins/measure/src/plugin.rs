@@ -4,6 +4,9 @@
 //! frames never wait for it); the result is [`BodyMeasurements`], and the avatar takes the
 //! measured shape ([`AvatarShape`]). A frame that fails a check restarts the collection and
 //! says why ([`CalibrationStatus::Collecting`]'s hint); no measurement comes from bad frames.
+//!
+//! The plugin also gives the tracker its fitter of the person's build ([`TrackerBuildFit`]:
+//! the same body fit on frames of the person moving, [`crate::build`]).
 
 use std::sync::Arc;
 use std::thread::JoinHandle;
@@ -14,9 +17,10 @@ use fitroom_body::plugin::{AvatarBody, AvatarShape};
 use fitroom_body::{Measure, Measurements, Shape};
 use fitroom_depth::plugin::DepthFeed;
 use fitroom_schedule::FitroomSystems;
-use fitroom_tracker::plugin::{TrackedSkeleton, UserMap};
+use fitroom_tracker::plugin::{TrackedSkeleton, TrackerBuildFit, UserMap};
 
 use crate::MeasureError;
+use crate::build::TrackedBuild;
 use crate::calibration::{Collecting, Collector, Progress};
 use crate::fit::{FitSettings, ViewPose};
 use crate::person::{PersonMeasurement, measure_person};
@@ -140,6 +144,10 @@ impl Plugin for MeasurePlugin {
             .map_err(|e| e.to_string());
         if let Err(e) = &prior {
             warn!("no shape prior, the person cannot be measured: {e}");
+        }
+        // The tracker estimates the person's build with the same fit.
+        if let Ok(prior) = &prior {
+            app.insert_resource(TrackerBuildFit(Arc::new(TrackedBuild::new(prior.clone()))));
         }
         app.init_resource::<Calibration>()
             .insert_resource(MeasurePrior(prior))

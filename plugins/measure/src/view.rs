@@ -61,18 +61,28 @@ const OUTLIER_MM: f64 = 40.0;
 pub const MIN_FRAMES: usize = 5;
 
 impl AveragedView {
-    /// The per-pixel average of `frames` (all of one camera).
+    /// The per-pixel average of `frames` (all of one camera), at least [`MIN_FRAMES`].
     pub fn new(frames: &[CalibrationFrame]) -> Result<Self, MeasureError> {
-        let first = frames.first().ok_or(MeasureError::TooFewFrames {
-            got: 0,
-            need: MIN_FRAMES,
-        })?;
         if frames.len() < MIN_FRAMES {
             return Err(MeasureError::TooFewFrames {
                 got: frames.len(),
                 need: MIN_FRAMES,
             });
         }
+        Self::average(frames)
+    }
+
+    /// One frame as a view, its noise as it is (the tracker's snapshots of a moving person,
+    /// [`crate::build`]).
+    pub fn single(frame: &CalibrationFrame) -> Result<Self, MeasureError> {
+        Self::average(std::slice::from_ref(frame))
+    }
+
+    fn average(frames: &[CalibrationFrame]) -> Result<Self, MeasureError> {
+        let first = frames.first().ok_or(MeasureError::TooFewFrames {
+            got: 0,
+            need: MIN_FRAMES,
+        })?;
         let n = frames.len();
         let mut masked = vec![0u16; PIXELS];
         let mut joints = [Vec3::ZERO; KinectJoint::COUNT];

@@ -5,8 +5,9 @@
 //! (gate, filter, retarget, limits, foot skate) runs on it as on a BVH clip's.
 //!
 //! The tracker fits the unshaped body of [`AvatarBody`]'s model (the person is not the
-//! avatar's shape: it sizes the body to them and estimates their build as it tracks); it is
-//! made when that body first exists.
+//! avatar's shape: it sizes the body to them and estimates their build as it tracks, with
+//! [`TrackerBuildFit`]'s fitter if another plugin gives one); it is made when that body first
+//! exists.
 
 use bevy::prelude::*;
 use fitroom_body::plugin::AvatarBody;
@@ -16,6 +17,7 @@ use fitroom_sensor::SensorFrame;
 use fitroom_sensor::plugin::SensorFeed;
 
 use crate::segment::Segmentation;
+use crate::shape::BuildFit;
 use crate::tracker::{Tracked, Tracker, TrackerSettings};
 
 /// Systems of the tracker plugin.
@@ -46,6 +48,11 @@ pub struct TrackedSkeleton {
     pub error: Option<String>,
 }
 
+/// The fitter of the person's build the tracker uses instead of its own search (the
+/// measurement plugin gives its body fit), read when the tracker is made.
+#[derive(Resource, Clone)]
+pub struct TrackerBuildFit(pub std::sync::Arc<dyn BuildFit>);
+
 /// Present when depth is the only sensor (a recording, a Kinect): the tracker's skeletons
 /// feed the motion pipeline.
 #[derive(Resource)]
@@ -74,13 +81,44 @@ impl Plugin for TrackerPlugin {
                 PostUpdate,
                 TrackerSystems::Track.in_set(FitroomSystems::Track),
             )
-            .add_systems(PostUpdate, track.in_set(TrackerSystems::Track));
+            .add_systems(
+                PostUpdate,
+                (make_tracker, track).chain().in_set(TrackerSystems::Track),
+            );
+    }
+}
+
+/// Makes the tracker once the avatar's body exists (and depth comes in).
+fn make_tracker(
+    depth: Option<Res<DepthFeed>>,
+    body: Option<Res<AvatarBody>>,
+    build_fit: Option<Res<TrackerBuildFit>>,
+    mut active: ResMut<ActiveTracker>,
+    mut skeleton: ResMut<TrackedSkeleton>,
+) {
+    if active.tracker.is_some() || skeleton.error.is_some() || depth.is_none() {
+        return;
+    }
+    let Some(body) = body else { return };
+    // The person's build is estimated on a thread of its own: a frame does not wait.
+    let mut settings = TrackerSettings::default();
+    settings.shape.background = true;
+    match Tracker::estimating(body.model.clone(), settings) {
+        Ok(tracker) => {
+            active.tracker = Some(match build_fit {
+                Some(fit) => tracker.with_build_fit(fit.0.clone()),
+                None => tracker,
+            })
+        }
+        Err(e) => {
+            warn!("no skeleton tracker: {e}");
+            skeleton.error = Some(e.to_string());
+        }
     }
 }
 
 fn track(
     depth: Option<Res<DepthFeed>>,
-    body: Option<Res<AvatarBody>>,
     from_depth: Option<Res<SkeletonFromDepth>>,
     mut active: ResMut<ActiveTracker>,
     mut map: ResMut<UserMap>,
@@ -92,19 +130,6 @@ fn track(
         return;
     }
     let Some(frame) = &depth.latest else { return };
-    if active.tracker.is_none() && skeleton.error.is_none() {
-        let Some(body) = body else { return };
-        // The person's build is estimated on a thread of its own: a frame does not wait.
-        let mut settings = TrackerSettings::default();
-        settings.shape.background = true;
-        match Tracker::estimating(body.model.clone(), settings) {
-            Ok(tracker) => active.tracker = Some(tracker),
-            Err(e) => {
-                warn!("no skeleton tracker: {e}");
-                skeleton.error = Some(e.to_string());
-            }
-        }
-    }
     let Some(tracker) = active.tracker.as_mut() else {
         return;
     };
