@@ -1,5 +1,7 @@
 //! Development loop for the tracker, without building the app: one recording with ground
-//! truth, the evaluation as JSON (as `fitroom track eval --json` gives), and on request:
+//! truth, the evaluation as JSON (as `fitroom track eval --json` gives, but with the tracker's
+//! own search for the build: the app gives it the measurement's fit, `fitroom_measure`), and
+//! on request:
 //!
 //! * `VERBOSE=1`: per frame, whether the fit (re)started, its statistics and each joint's error;
 //! * `SIGNED=1`: each joint's mean signed error (a bias shows here, not in the mean distance);
@@ -7,7 +9,9 @@
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
 //!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
-//!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`: override the settings.
+//!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
+//!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
+//!   `SNAPS`, `EVERY`: override the settings.
 //!
 //! CPU time per frame (this thread's, from `/proc/thread-self/schedstat`: this host's wall
 //! time is noisier) goes to stderr.
@@ -53,6 +57,13 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("OUTLIER") {
         s.fit.outlier_m = v;
     }
+    if let Some(v) = env("SNAPS") {
+        s.shape.snapshots = v as usize;
+    }
+    if let Some(v) = env("EVERY") {
+        s.shape.every = v as usize;
+    }
+    s.segment.wall = std::env::var("NO_WALL").is_err();
     s.scale = env("SCALE");
     s.recover = std::env::var("NO_RECOVER").is_err();
     s
@@ -89,16 +100,20 @@ fn main() -> Result<(), Error> {
         let start = cpu_ns();
         let out = eval.step(&mut tracker, &frame, &joints);
         cpu_ms.push(cpu_ns().saturating_sub(start) as f64 / 1e6);
+        if picture_at == Some(line.frame) {
+            let mut bytes = b"P6 640 480 255\n".to_vec();
+            bytes.extend(fitroom_tracker::draw::picture(
+                &frame,
+                out.as_ref(),
+                &joints,
+            ));
+            std::fs::write("/tmp/frame.ppm", bytes)?;
+        }
         let Some(t) = out else { continue };
         last_size = Some(t.pose.scale * tracker.body.height_m);
         for ((sum, j), g) in signed.iter_mut().zip(&t.joints).zip(&joints) {
             sum.0 += j.position - *g;
             sum.1 += 1;
-        }
-        if picture_at == Some(line.frame) {
-            let mut bytes = b"P6 640 480 255\n".to_vec();
-            bytes.extend(fitroom_tracker::draw::picture(&frame, Some(&t), &joints));
-            std::fs::write("/tmp/frame.ppm", bytes)?;
         }
         if std::env::var("VERBOSE").is_ok() {
             let errors: Vec<String> = t
@@ -137,8 +152,8 @@ fn main() -> Result<(), Error> {
             e.shape.muscle,
             e.shape.height,
             e.shape.proportions,
-            e.cost_m * 1000.0,
-            e.default_cost_m * 1000.0,
+            e.cost_m.unwrap_or(f32::NAN) * 1000.0,
+            e.default_cost_m.unwrap_or(f32::NAN) * 1000.0,
             e.evaluations
         );
     }

@@ -1,13 +1,15 @@
 //! The floor plane in a depth frame: RANSAC (Fischler & Bolles 1981) over points of the
 //! image's lower part, planes allowed within 35° of level (the sensor stands roughly upright),
 //! refined by least squares on the inliers. Deterministic: the same frame gives the same plane.
+//! The same for the wall behind the person (the image's upper part, planes facing the sensor).
 
 use fitroom_depth::{DepthFrame, HEIGHT, WIDTH};
 use glam::{DMat3, DVec3, Vec3};
 use serde::Serialize;
 
-/// A plane `normal · p + d = 0` in sensor space, `normal` a unit vector pointing up (+Y side),
-/// so that [`Plane::height`] is the height above it.
+/// A plane `normal · p + d = 0` in sensor space, `normal` a unit vector on the side the plane
+/// faces (up for a floor, towards the sensor for a wall), so that [`Plane::height`] is the
+/// height above it (the distance in front of it).
 #[derive(Clone, Copy, Debug, PartialEq, Serialize)]
 pub struct Plane {
     pub normal: Vec3,
@@ -20,15 +22,15 @@ impl Plane {
         self.normal.dot(p) + self.d
     }
 
-    /// The plane through three points, its normal turned up; `None` when they are (nearly)
-    /// collinear.
-    fn through(a: Vec3, b: Vec3, c: Vec3) -> Option<Self> {
+    /// The plane through three points, its normal turned to `axis`'s side; `None` when they
+    /// are (nearly) collinear.
+    fn through(a: Vec3, b: Vec3, c: Vec3, axis: Vec3) -> Option<Self> {
         let n = (b - a).cross(c - a);
         let length = n.length();
         if length < 1e-6 {
             return None;
         }
-        let n = if n.y < 0.0 { -n } else { n } / length;
+        let n = if n.dot(axis) < 0.0 { -n } else { n } / length;
         Some(Self {
             normal: n,
             d: -n.dot(a),
@@ -81,13 +83,43 @@ pub fn floor_samples_into(frame: &DepthFrame, points: &mut Vec<Vec3>) {
     }
 }
 
+/// Points of the upper 45 % of the image at least `beyond_m` away (z), every 4th pixel each
+/// way, sensor space, into `points` (cleared first); returns how many pixels there had a
+/// reading at all (what a wall's support is counted against).
+pub fn wall_samples_into(frame: &DepthFrame, beyond_m: f32, points: &mut Vec<Vec3>) -> usize {
+    let camera = frame.camera;
+    points.clear();
+    let mut readings = 0;
+    for j in (0..HEIGHT * 45 / 100).step_by(4) {
+        for i in (0..WIDTH).step_by(4) {
+            let mm = frame.depth_mm[j * WIDTH + i];
+            if mm > 0 {
+                readings += 1;
+                let z = f32::from(mm) / 1000.0;
+                if z >= beyond_m {
+                    points.push(camera.unproject(i as f32, j as f32, z));
+                }
+            }
+        }
+    }
+    readings
+}
+
 /// The best-supported level plane among `points`, refined; `None` when no plane holds
 /// [`FloorSettings::min_support`] of them.
 pub fn fit_floor(points: &[Vec3], settings: &FloorSettings) -> Option<(Plane, usize)> {
+    fit_plane(points, settings, Vec3::Y)
+}
+
+/// The best-supported plane among `points` whose normal lies within
+/// [`FloorSettings::max_tilt_deg`] of `axis` (a unit axis of sensor space: +Y for a floor,
+/// -Z for a wall facing the sensor), its normal on `axis`'s side, refined; `None` when no
+/// such plane holds [`FloorSettings::min_support`] of them.
+pub fn fit_plane(points: &[Vec3], settings: &FloorSettings, axis: Vec3) -> Option<(Plane, usize)> {
     if points.len() < 30 {
         return None;
     }
-    let min_up = settings.max_tilt_deg.to_radians().cos();
+    let min_along = settings.max_tilt_deg.to_radians().cos();
     let mut state = 0x9e37_79b9_7f4a_7c15_u64 ^ points.len() as u64;
     let mut pick = || {
         // xorshift64*: a deterministic stream of indices.
@@ -104,10 +136,11 @@ pub fn fit_floor(points: &[Vec3], settings: &FloorSettings) -> Option<(Plane, us
     };
     let mut best: Option<(Plane, usize)> = None;
     for _ in 0..settings.candidates {
-        let Some(plane) = Plane::through(points[pick()], points[pick()], points[pick()]) else {
+        let Some(plane) = Plane::through(points[pick()], points[pick()], points[pick()], axis)
+        else {
             continue;
         };
-        if plane.normal.y < min_up {
+        if plane.normal.dot(axis) < min_along {
             continue;
         }
         let count = support(&plane);
@@ -124,34 +157,88 @@ pub fn fit_floor(points: &[Vec3], settings: &FloorSettings) -> Option<(Plane, us
         .copied()
         .filter(|&p| plane.height(p).abs() < settings.inlier_m)
         .collect();
-    let refined = least_squares(&inliers).unwrap_or(plane);
+    let refined = least_squares(&inliers, axis).unwrap_or(plane);
     Some((refined, support(&refined)))
 }
 
-/// The plane `y = a x + b z + c` nearest `points` in y (the floor is near level), as a
-/// [`Plane`].
-fn least_squares(points: &[Vec3]) -> Option<Plane> {
+/// The plane `w = a u + b v + c` nearest `points` along `w`, the coordinate `axis` points
+/// along (y for a floor, z for a wall; `u`, `v` the other two), as a [`Plane`] with its
+/// normal on `axis`'s side.
+fn least_squares(points: &[Vec3], axis: Vec3) -> Option<Plane> {
+    let a = axis.abs();
+    let w = if a.y >= a.x && a.y >= a.z {
+        1
+    } else if a.z >= a.x {
+        2
+    } else {
+        0
+    };
+    let (u, v) = match w {
+        1 => (0, 2),
+        2 => (0, 1),
+        _ => (1, 2),
+    };
     let (mut m, mut r) = (DMat3::ZERO, DVec3::ZERO);
     for p in points {
-        let row = DVec3::new(f64::from(p.x), f64::from(p.z), 1.0);
+        let row = DVec3::new(f64::from(p[u]), f64::from(p[v]), 1.0);
         m += DMat3::from_cols(row * row.x, row * row.y, row * row.z);
-        r += row * f64::from(p.y);
+        r += row * f64::from(p[w]);
     }
     if m.determinant().abs() < 1e-9 {
         return None;
     }
     let [a, b, c] = (m.inverse() * r).to_array();
-    let n = DVec3::new(-a, 1.0, -b);
+    let mut n = DVec3::ZERO;
+    (n[u], n[w], n[v]) = (-a, 1.0, -b);
     let length = n.length();
+    let (mut n, mut d) = (n / length, -c / length);
+    if n.dot(axis.as_dvec3()) < 0.0 {
+        (n, d) = (-n, -d);
+    }
     Some(Plane {
-        normal: (n / length).as_vec3(),
-        d: (-c / length) as f32,
+        normal: n.as_vec3(),
+        d: d as f32,
     })
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use glam::Quat;
+
+    /// A wall 3.6 m away turned 20° about the vertical and leaning 5° back, with a person's
+    /// worth of points in front of it: found within a millimetre, its normal facing the
+    /// sensor; no wall among points that are all level.
+    #[test]
+    fn a_turned_wall_is_found_and_faces_the_sensor() {
+        let normal = (Quat::from_rotation_y(20f32.to_radians())
+            * Quat::from_rotation_x(5f32.to_radians())
+            * -Vec3::Z)
+            .normalize();
+        let truth = Plane { normal, d: 3.6 };
+        let (u, v) = (normal.cross(Vec3::Y).normalize(), Vec3::Y);
+        let v = (v - normal * v.dot(normal)).normalize();
+        let origin = -normal * truth.d;
+        let mut points = Vec::new();
+        for i in 0..40 {
+            for k in 0..20 {
+                let p = origin + u * (i as f32 * 0.1 - 2.0) + v * (k as f32 * 0.1 - 1.0);
+                points.push(p);
+                if i % 4 == 0 {
+                    points.push(p + normal * (0.5 + 0.02 * (k % 9) as f32));
+                }
+            }
+        }
+        let (found, _) = fit_plane(&points, &FloorSettings::default(), -Vec3::Z).expect("a wall");
+        assert!(found.normal.angle_between(normal) < 1e-3, "{found:?}");
+        assert!((found.d - truth.d).abs() < 1e-3, "{found:?}");
+        // In front of the wall is positive: the sensor (the origin) is 3.6 m in front.
+        assert!((found.height(Vec3::ZERO) - 3.6).abs() < 1e-3);
+        let level: Vec<Vec3> = (0..900)
+            .map(|k| Vec3::new((k % 30) as f32 * 0.1, -0.8, 2.0 + (k / 30) as f32 * 0.1))
+            .collect();
+        assert!(fit_plane(&level, &FloorSettings::default(), -Vec3::Z).is_none());
+    }
 
     /// A tilted floor with outliers above it: found within a millimetre and a tenth of a
     /// degree.

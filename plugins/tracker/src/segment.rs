@@ -20,7 +20,9 @@ use fitroom_depth::{DepthFrame, HEIGHT, PIXELS, WIDTH};
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::floor::{FloorSettings, Plane, fit_floor, floor_samples_into};
+use crate::floor::{
+    FloorSettings, Plane, fit_floor, fit_plane, floor_samples_into, wall_samples_into,
+};
 
 mod components;
 mod parts;
@@ -44,6 +46,10 @@ pub struct SegmentSettings {
     /// Whether parts of the person a depth edge cut off (an arm seen past their back, a
     /// hand held out) are added to them (module `parts`).
     pub join_parts: bool,
+    /// Whether the wall behind the interaction area, if one is seen, is taken out as the
+    /// floor is (readings within its band are no one's): a foot or hand stretched back to
+    /// within a few centimetres of it no longer joins the person to the wall.
+    pub wall: bool,
 }
 
 impl Default for SegmentSettings {
@@ -56,6 +62,7 @@ impl Default for SegmentSettings {
             centre_z_m: 2.5,
             min_area_m2: 0.08,
             join_parts: true,
+            wall: true,
         }
     }
 }
@@ -83,6 +90,10 @@ pub struct Segmentation {
 pub struct Segmenter {
     pub settings: SegmentSettings,
     floor: Option<(Plane, usize)>,
+    /// The wall behind the interaction area and its support, and the frames until it is
+    /// looked for again when there is none.
+    wall: Option<(Plane, usize)>,
+    wall_wait: u32,
     /// The last frame's person and their pixel count.
     previous: Option<(Vec<bool>, usize)>,
     /// Scratch, kept so that a frame allocates only the mask it returns.
@@ -94,8 +105,10 @@ pub struct Segmenter {
 struct Scratch {
     /// Per pixel, the depth of a reading above the floor band (0: none), metres.
     depth: Vec<f32>,
-    /// Per image column, the column term of a ray's height factor.
+    /// Per image column, the column term of a ray's height factor (above the floor, in
+    /// front of the wall).
     column: Vec<f32>,
+    wall_column: Vec<f32>,
     components: Components,
     /// Per component (index 0 unused), what was gathered.
     stats: Vec<Stats>,
@@ -103,11 +116,18 @@ struct Scratch {
     row: Vec<f32>,
     /// Per component, the greatest and least x and z of the ends of its runs, metres.
     ends: Vec<[f32; 4]>,
-    /// The points the floor is fitted to or checked against.
+    /// The points the floor (the wall) is fitted to or checked against.
     floor_samples: Vec<Vec3>,
+    wall_samples: Vec<Vec3>,
     /// The person's parts cut off by a depth edge, with their bordering pixels.
     parts: Vec<(u32, usize)>,
 }
+
+/// The wall taken out lies at least this far behind the interaction area's centre, metres
+/// (a person standing there is never taken for it).
+const WALL_BEHIND_M: f32 = 0.6;
+/// Frames between searches for a wall while none is seen.
+const WALL_WAIT_FRAMES: u32 = 30;
 
 /// A person is narrower than this (sensor x), metres.
 const MAX_WIDTH_M: f32 = 2.0;
@@ -227,7 +247,8 @@ impl Segmenter {
         }
         let floor = self.floor(frame)?;
         let s = self.settings;
-        self.above_floor(frame, &floor);
+        let wall = if s.wall { self.wall(frame) } else { None };
+        self.above_floor(frame, &floor, wall.as_ref());
         let Scratch {
             depth, components, ..
         } = &mut self.scratch;
@@ -291,17 +312,30 @@ impl Segmenter {
         })
     }
 
-    /// Fills `scratch.depth`: the depth of each reading above the floor band, 0 elsewhere.
+    /// Fills `scratch.depth`: the depth of each reading above the floor band and in front of
+    /// the wall's, 0 elsewhere.
     ///
     /// A pixel's point is z times its ray `r = ((cx - i) / fx, (cy - j) / fy, 1)`, so its
-    /// height is `z (n · r) + d`, and `n · r` is a column term plus a row term. The loop has
-    /// no branch, so that it vectorises.
-    fn above_floor(&mut self, frame: &DepthFrame, floor: &Plane) {
+    /// height is `z (n · r) + d`, and `n · r` is a column term plus a row term (the same for
+    /// the distance in front of the wall). The loop has no branch, so that it vectorises.
+    fn above_floor(&mut self, frame: &DepthFrame, floor: &Plane, wall: Option<&Plane>) {
         let camera = frame.camera;
         let band = self.settings.floor_band_m;
-        let Scratch { depth, column, .. } = &mut self.scratch;
+        // No wall: a plane every reading is far in front of.
+        let wall = wall.copied().unwrap_or(Plane {
+            normal: Vec3::ZERO,
+            d: f32::MAX,
+        });
+        let Scratch {
+            depth,
+            column,
+            wall_column,
+            ..
+        } = &mut self.scratch;
         column.clear();
         column.extend((0..WIDTH).map(|i| floor.normal.x * (camera.cx - i as f32) / camera.fx));
+        wall_column.clear();
+        wall_column.extend((0..WIDTH).map(|i| wall.normal.x * (camera.cx - i as f32) / camera.fx));
         depth.resize(PIXELS, 0.0);
         for (j, (out, mm)) in depth
             .chunks_exact_mut(WIDTH)
@@ -309,11 +343,18 @@ impl Segmenter {
             .enumerate()
         {
             let row = floor.normal.y * (camera.cy - j as f32) / camera.fy + floor.normal.z;
-            for ((out, &mm), &col) in out.iter_mut().zip(mm).zip(column.iter()) {
+            let wall_row = wall.normal.y * (camera.cy - j as f32) / camera.fy + wall.normal.z;
+            for (((out, &mm), &col), &wall_col) in out
+                .iter_mut()
+                .zip(mm)
+                .zip(column.iter())
+                .zip(wall_column.iter())
+            {
                 let z = f32::from(mm) * 0.001;
-                let noise = axial_sigma_with_grazing_m(z, 0.0);
-                let above = z * (col + row) + floor.d > band + 3.0 * noise;
-                *out = if mm > 0 && above { z } else { 0.0 };
+                let noise = band + 3.0 * axial_sigma_with_grazing_m(z, 0.0);
+                let above = z * (col + row) + floor.d > noise;
+                let in_front = z * (wall_col + wall_row) + wall.d > noise;
+                *out = if mm > 0 && above && in_front { z } else { 0.0 };
             }
         }
     }
@@ -420,6 +461,42 @@ impl Segmenter {
                 }
             }
         }
+    }
+
+    /// The wall behind the interaction area: a plane facing the sensor (within the floor's
+    /// tilt of it) at least [`WALL_BEHIND_M`] behind the interaction area, holding a quarter
+    /// of the readings of the image's upper part (a person's upper body there holds a tenth
+    /// at most). As the floor: kept while it holds most of its support; when there is none,
+    /// looked for again every [`WALL_WAIT_FRAMES`] frames (a search costs about a
+    /// millisecond).
+    fn wall(&mut self, frame: &DepthFrame) -> Option<Plane> {
+        let beyond = self.settings.centre_z_m + WALL_BEHIND_M;
+        let samples = &mut self.scratch.wall_samples;
+        let readings = wall_samples_into(frame, beyond, samples);
+        let inlier = self.settings.floor.inlier_m;
+        if let Some((plane, support)) = self.wall {
+            let now = samples
+                .iter()
+                .filter(|&&p| plane.height(p).abs() < inlier)
+                .count();
+            if now * 10 >= support * 7 {
+                return Some(plane);
+            }
+            self.wall = None;
+        } else if self.wall_wait > 0 {
+            self.wall_wait -= 1;
+            return None;
+        }
+        let settings = FloorSettings {
+            min_support: 0.0,
+            ..self.settings.floor
+        };
+        self.wall = fit_plane(samples, &settings, -Vec3::Z)
+            .filter(|&(_, support)| support * 4 >= readings && readings > 0);
+        if self.wall.is_none() {
+            self.wall_wait = WALL_WAIT_FRAMES;
+        }
+        self.wall.map(|(plane, _)| plane)
     }
 
     /// The floor: the last one while it still holds most of its support, else fitted anew.

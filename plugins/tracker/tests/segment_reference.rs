@@ -83,6 +83,7 @@ fn the_segmentation_is_the_flood_fills() {
     // (added since, module `segment::parts`) are tested in `tests/segment.rs`.
     let settings = SegmentSettings {
         join_parts: false,
+        wall: false,
         ..SegmentSettings::default()
     };
     let (mut new, mut old) = (Segmenter::new(settings), FloodFill::new(settings));
