@@ -56,7 +56,7 @@ pub struct HandOut {
 
 pub fn gesture_run(dump: &Path, body: &BodyArg) -> Result<GestureRunReport> {
     let model = Arc::new(body.load()?);
-    let mut tracker = super::track::tracker(&model)?;
+    let mut tracker = super::track::tracker(&model, &super::track::build_fit()?)?;
     let hands = HandModel::embedded()?;
     let recording = Recording::open(dump)?;
     let mut reader = GestureReader::new(Some(hands));

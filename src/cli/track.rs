@@ -284,15 +284,20 @@ fn track_model(body: &BodyArg) -> Result<Arc<BodyModel>> {
     Ok(Arc::new(body.load()?))
 }
 
-/// A tracker for `model`, estimating each person's build as it tracks them with the
-/// measurement's body fit, as the kiosk does (in the frame that completes its snapshots: the
-/// same recording gives the same figures).
-pub fn tracker(model: &Arc<BodyModel>) -> Result<Tracker> {
+/// The measurement's body fit as the tracker's estimate of each person's build, as the kiosk
+/// has it (the shipped shape prior, read once for all the trackers made with it).
+pub fn build_fit() -> Result<Arc<TrackedBuild>> {
     let prior = ShapePrior::shipped().context("the shipped shape prior cannot be read")?;
+    Ok(Arc::new(TrackedBuild::new(Arc::new(prior))))
+}
+
+/// A tracker for `model`, estimating each person's build as it tracks them with `build`
+/// (in the frame that completes its snapshots: the same recording gives the same figures).
+pub fn tracker(model: &Arc<BodyModel>, build: &Arc<TrackedBuild>) -> Result<Tracker> {
     Ok(
         Tracker::estimating(model.clone(), TrackerSettings::default())
             .context("the body cannot be tracked (its rig lacks a bone the tracker needs)")?
-            .with_build_fit(Arc::new(TrackedBuild::new(Arc::new(prior)))),
+            .with_build_fit(build.clone()),
     )
 }
 
@@ -302,6 +307,7 @@ const PICTURE_AT: [f64; 4] = [0.1, 0.35, 0.6, 0.85];
 fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEvalReport> {
     let mut pictures: Vec<(Vec<u8>, Option<[u16; 4]>)> = Vec::new();
     let model = track_model(body)?;
+    let build = build_fit()?;
     let camera = DepthCamera::default();
     let mut overall = Evaluation::new();
     let mut starts = 0;
@@ -318,7 +324,7 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
         // A tracker of its own: nothing of one recording (its floor, its person's build)
         // carries into the next, so each one's figures do not depend on the order (they did,
         // by 57 mm on a T-shirt recording the fit loses a limb in).
-        let mut tracker = tracker(&model)?;
+        let mut tracker = tracker(&model, &build)?;
         let mut one = Evaluation::new();
         let count = recording.depth_count();
         let shown: Vec<usize> = PICTURE_AT
@@ -445,7 +451,7 @@ pub struct RunFrame {
 }
 
 fn track_run(dump: &Path, body: &BodyArg) -> Result<RunReport> {
-    let mut tracker = tracker(&track_model(body)?)?;
+    let mut tracker = tracker(&track_model(body)?, &build_fit()?)?;
     let recording = Recording::open(dump)?;
     let mut frames = Vec::new();
     for (i, entry) in recording.depth_entries().enumerate() {

@@ -470,6 +470,10 @@ impl Segmenter {
     /// looked for again every [`WALL_WAIT_FRAMES`] frames (a search costs about a
     /// millisecond).
     fn wall(&mut self, frame: &DepthFrame) -> Option<Plane> {
+        if self.wall.is_none() && self.wall_wait > 0 {
+            self.wall_wait -= 1;
+            return None;
+        }
         let beyond = self.settings.centre_z_m + WALL_BEHIND_M;
         let samples = &mut self.scratch.wall_samples;
         let readings = wall_samples_into(frame, beyond, samples);
@@ -482,10 +486,6 @@ impl Segmenter {
             if now * 10 >= support * 7 {
                 return Some(plane);
             }
-            self.wall = None;
-        } else if self.wall_wait > 0 {
-            self.wall_wait -= 1;
-            return None;
         }
         let settings = FloorSettings {
             min_support: 0.0,

@@ -192,8 +192,6 @@ pub struct Tracker {
     scale: Option<f32>,
     /// The sizes the frames tracked well imply ([`Self::refine_size`]).
     sizing: Vec<f32>,
-    /// Whether the body has the person's size (a [`BuildFit`] made it): scale 1, no sizing.
-    sized: bool,
     /// See [`Tracked::body_changes`].
     body_changes: u32,
     /// Per Kinect bone, the inverse of the motion pipeline's constant `C` (its driver's rest
@@ -235,7 +233,6 @@ impl Tracker {
             pose: None,
             scale: None,
             sizing: Vec::new(),
-            sized: false,
             body_changes: 0,
             starts: 0,
             recoveries: 0,
@@ -349,7 +346,6 @@ impl Tracker {
                 pose.scale = 1.0;
             }
             self.scale = Some(1.0);
-            self.sized = true;
         } else {
             let resize = self.body.height_m / estimate.body.height_m;
             if let Some(scale) = &mut self.scale {
@@ -370,7 +366,6 @@ impl Tracker {
     fn forget_size(&mut self) {
         self.scale = None;
         self.sizing.clear();
-        self.sized = false;
     }
 
     /// The size measured again in frames tracked well: each frame's top seen against the
@@ -381,8 +376,9 @@ impl Tracker {
     /// ever lowers the top, so the size is an upper quantile of the frames'
     /// ([`SIZE_QUANTILE`]), set anew every [`SIZE_EVERY`] frames until [`SIZE_FRAMES`].
     fn refine_size(&mut self, person: &Segmentation, pose: &mut Pose, well: bool) {
-        if self.sizing.len() >= SIZE_FRAMES || !well || self.sized || self.settings.scale.is_some()
-        {
+        // A body of the person's size (a `BuildFit` made it) is not sized again.
+        let sized = self.shape.as_ref().is_some_and(|e| e.sized);
+        if self.sizing.len() >= SIZE_FRAMES || !well || sized || self.settings.scale.is_some() {
             return;
         }
         let floor = person.floor;
