@@ -11,7 +11,7 @@
 //!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
-//!   `SNAPS`, `EVERY`: override the settings.
+//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`: override the settings.
 //!
 //! CPU time per frame (this thread's, from `/proc/thread-self/schedstat`: this host's wall
 //! time is noisier) goes to stderr.
@@ -62,6 +62,12 @@ fn settings() -> TrackerSettings {
     }
     if let Some(v) = env("EVERY") {
         s.shape.every = v as usize;
+    }
+    if let Some(v) = env("CARRY_TURN") {
+        s.carry_turn = v;
+    }
+    if let Some(v) = env("TURN_MARGIN") {
+        s.turn_margin = v;
     }
     s.segment.wall = std::env::var("NO_WALL").is_err();
     s.scale = env("SCALE");
@@ -122,14 +128,17 @@ fn main() -> Result<(), Error> {
                 .zip(&joints)
                 .map(|(j, g)| format!("{:.0}", j.position.distance(*g) * 1000.0))
                 .collect();
+            let tracked: Vec<Vec3> = t.joints.iter().map(|j| j.position).collect();
             println!(
-                "frame {} start {} inliers {:.2} outside {:.2} residual {:.1} mm scale {:.3} | {}",
+                "frame {} start {} inliers {:.2} outside {:.2} residual {:.1} mm scale {:.3} yaw {:.0} true {:.0} | {}",
                 line.frame,
                 t.started,
                 t.fit.inliers,
                 t.fit.outside,
                 t.fit.mean_residual_m * 1000.0,
                 t.pose.scale,
+                yaw(&tracked),
+                yaw(&joints),
                 errors.join(" ")
             );
         }
@@ -171,6 +180,13 @@ fn main() -> Result<(), Error> {
         serde_json::to_string_pretty(&eval.report(tracker.starts))?
     );
     Ok(())
+}
+
+/// The direction the person faces about the vertical, degrees (0: towards the camera), from
+/// the hips' and shoulders' left-right line.
+fn yaw(j: &[Vec3]) -> f32 {
+    let across = (j[12] - j[16]) + (j[4] - j[8]);
+    across.z.atan2(-across.x).to_degrees()
 }
 
 /// This thread's CPU time, ns.

@@ -15,7 +15,6 @@ use fitroom_sensor::{JointSample, KinectJoint, SensorFrame};
 use glam::{Quat, Vec3};
 use serde::Serialize;
 
-use crate::extrema::{Part, geodesic_extrema};
 use crate::fit::{FitSettings, FitStats, Fitter, Observation};
 use crate::model::{ModelError, Pose, Posed, TrackBody};
 use crate::segment::{SegmentSettings, Segmentation, Segmenter};
@@ -56,6 +55,13 @@ pub struct TrackerSettings {
     pub shape: ShapeSettings,
     /// Try the limbs a followed fit seems to have lost afresh ([`recover`]).
     pub recover: bool,
+    /// How much of the body's last turn about the vertical (between the last two frames) is
+    /// carried into the next frame's starting pose ([`carry_turn`]): 0 none, 1 all.
+    pub carry_turn: f32,
+    /// A start facing the other way than the person last faced (or, for a new person, with
+    /// their back to the sensor) is taken only when it explains the frame better by this
+    /// ([`score`]).
+    pub turn_margin: f32,
 }
 
 impl Default for TrackerSettings {
@@ -72,6 +78,8 @@ impl Default for TrackerSettings {
             scale: None,
             shape: ShapeSettings::default(),
             recover: true,
+            carry_turn: 1.0,
+            turn_margin: 0.06,
         }
     }
 }
@@ -177,6 +185,9 @@ enum Estimation {
 }
 
 mod recover;
+mod start;
+
+use start::carry_turn;
 
 /// The tracker's state between frames.
 pub struct Tracker {
@@ -188,6 +199,8 @@ pub struct Tracker {
     posed: Posed,
     points: Vec<Vec3>,
     pose: Option<Pose>,
+    /// The pose of the frame before `pose`'s, when both were followed (the body's motion).
+    previous: Option<Pose>,
     /// The person's size (the body's scale), measured when they were first seen whole.
     scale: Option<f32>,
     /// The sizes the frames tracked well imply ([`Self::refine_size`]).
@@ -231,6 +244,7 @@ impl Tracker {
             posed: Posed::default(),
             points: Vec::new(),
             pose: None,
+            previous: None,
             scale: None,
             sizing: Vec::new(),
             body_changes: 0,
@@ -424,6 +438,7 @@ impl Tracker {
     /// Forgets the person: the next frame starts afresh.
     pub fn reset(&mut self) {
         self.pose = None;
+        self.previous = None;
         self.forget_size();
         self.segmenter.reset();
         self.forget_shape();
@@ -442,8 +457,14 @@ impl Tracker {
         self.silhouette.update(&person.mask, person.bbox);
         let settings = self.settings;
         let mut started = false;
+        let previous = self.previous.take();
         let (pose, fit) = match self.pose.take() {
             Some(mut pose) => {
+                let last = pose.clone();
+                if let Some(before) = &previous {
+                    carry_turn(&mut pose, before, person.floor.normal, settings.carry_turn);
+                }
+                self.previous = Some(last);
                 let fit = self.fit(frame, &person, &mut pose, &[], settings.iterations);
                 let (pose, fit) = if settings.recover {
                     self.recover(frame, &person, pose, fit)
@@ -451,8 +472,10 @@ impl Tracker {
                     (pose, fit)
                 };
                 if fit.inliers < settings.min_inliers || fit.outside > settings.max_outside {
-                    let (fresh, fresh_fit) = self.start(frame, &person);
+                    let away = self.faces_away(&pose);
+                    let (fresh, fresh_fit) = self.start(frame, &person, away);
                     started = true;
+                    self.previous = None;
                     if score(&fresh_fit) > score(&fit) {
                         (fresh, fresh_fit)
                     } else {
@@ -464,11 +487,12 @@ impl Tracker {
             }
             None => {
                 started = true;
-                self.start(frame, &person)
+                self.start(frame, &person, false)
             }
         };
         if !pose.is_finite() {
             self.pose = None;
+            self.previous = None;
             return None;
         }
         let joints = self.joints(frame, &pose);
@@ -540,81 +564,6 @@ impl Tracker {
         };
         self.fitter
             .fit(&self.body, pose, &obs, &self.settings.fit, iterations)
-    }
-
-    /// Starts from nothing: the body standing under the person, sized by their height,
-    /// pulled to the geodesic extrema, then fitted to the depth alone.
-    fn start(&mut self, frame: &DepthFrame, person: &Segmentation) -> (Pose, FitStats) {
-        self.starts += 1;
-        let floor = person.floor;
-        let ends = geodesic_extrema(frame, person);
-        // The head's end, if it is one: near the top of the person and above their middle (a
-        // broad shoulder can pass for it).
-        let head = ends
-            .iter()
-            .find(|e| e.part == Part::Head)
-            .map(|e| e.position)
-            .filter(|h| {
-                floor.height(*h) > person.top_m - 0.3 && (h.x - person.centroid.x).abs() < 0.25
-            });
-        // The person's height: the top of what is seen, unless that is a raised hand; then
-        // the highest point near the head's end.
-        let whole = usize::from(person.bbox[3]) + 1 < HEIGHT && usize::from(person.bbox[1]) > 0;
-        let hand_on_top = ends.iter().any(|e| {
-            matches!(e.part, Part::HandLeft | Part::HandRight)
-                && floor.height(e.position) > person.top_m - 0.1
-        });
-        let top = match (hand_on_top, head) {
-            (false, _) => Some(person.top_m),
-            (true, Some(h)) => Some(
-                self.points
-                    .iter()
-                    .filter(|p| (p.x - h.x).abs() < 0.1 && (p.z - h.z).abs() < 0.25)
-                    .map(|&p| floor.height(p))
-                    .fold(floor.height(h), f32::max),
-            ),
-            (true, None) => None,
-        };
-        // Beneath the centroid of what is seen, half a body's depth behind it.
-        let spot = |scale: f32| {
-            let centre = person.centroid + person.centroid.normalize_or_zero() * 0.08 * scale;
-            centre - floor.normal * floor.height(centre)
-        };
-        let scale = match (self.settings.scale.or(self.scale), top) {
-            (Some(s), _) => s,
-            (None, Some(top)) if whole => {
-                // The top seen is the outline's, under the crown.
-                let seen = self
-                    .body
-                    .rest_seen_top(spot(top / self.body.height_m), floor.normal);
-                let s = (top / seen).clamp(SIZE_LIMITS.0, SIZE_LIMITS.1);
-                self.scale = Some(s);
-                s
-            }
-            // Not measurable yet (cut off, or arms up and no head found): the body's own
-            // size until the person is seen whole.
-            _ => 1.0,
-        };
-        let mut pose = self.body.standing_on(spot(scale), floor.normal, scale);
-        let targets: Vec<(usize, Vec3, f32)> = ends
-            .iter()
-            .filter_map(|e| {
-                let joint = match e.part {
-                    Part::Head if head.is_some() => KinectJoint::Head,
-                    Part::Head => return None,
-                    Part::HandLeft => KinectJoint::HandLeft,
-                    Part::HandRight => KinectJoint::HandRight,
-                    Part::FootLeft => KinectJoint::FootLeft,
-                    Part::FootRight => KinectJoint::FootRight,
-                    Part::Other => return None,
-                };
-                Some((joint.index(), e.joint, 1.0))
-            })
-            .collect();
-        let n = self.settings.start_iterations;
-        self.fit(frame, person, &mut pose, &targets, n);
-        let fit = self.fit(frame, person, &mut pose, &[], n / 3);
-        (pose, fit)
     }
 
     /// The Kinect joints of `pose`, their pixels, confidences and orientations.

@@ -1,0 +1,194 @@
+//! Starting from nothing, and which way the person faces. A start places the body standing
+//! under the person, sized by their height, pulls it to the geodesic extrema and fits it to
+//! the depth alone, twice: facing the sensor and with its back to it (the person may have
+//! turned while no one was tracked: a dancer's spin). Which of the two is kept leans to the
+//! way the person last faced, since a trunk seen from the front or the back differs in the
+//! depth by little more than the sensor's steps at 3 m; a followed fit carries on the turn the
+//! body was making ([`carry_turn`]).
+
+use fitroom_depth::DepthFrame;
+use fitroom_sensor::KinectJoint;
+use glam::{Quat, Vec3};
+
+use super::{HEIGHT, SIZE_LIMITS, Tracker, score};
+use crate::extrema::{Part, geodesic_extrema};
+use crate::fit::FitStats;
+use crate::model::Pose;
+use crate::segment::Segmentation;
+
+impl Tracker {
+    /// Starts from nothing: the body standing under the person, sized by their height,
+    /// pulled to the geodesic extrema, then fitted to the depth alone; facing the way
+    /// `prior_away` says unless the other way explains the frame better by
+    /// [`super::TrackerSettings::turn_margin`].
+    pub(super) fn start(
+        &mut self,
+        frame: &DepthFrame,
+        person: &Segmentation,
+        prior_away: bool,
+    ) -> (Pose, FitStats) {
+        self.starts += 1;
+        let floor = person.floor;
+        let ends = geodesic_extrema(frame, person);
+        // The head's end, if it is one: near the top of the person and above their middle (a
+        // broad shoulder can pass for it).
+        let head = ends
+            .iter()
+            .find(|e| e.part == Part::Head)
+            .map(|e| e.position)
+            .filter(|h| {
+                floor.height(*h) > person.top_m - 0.3 && (h.x - person.centroid.x).abs() < 0.25
+            });
+        // The person's height: the top of what is seen, unless that is a raised hand; then
+        // the highest point near the head's end.
+        let whole = usize::from(person.bbox[3]) + 1 < HEIGHT && usize::from(person.bbox[1]) > 0;
+        let hand_on_top = ends.iter().any(|e| {
+            matches!(e.part, Part::HandLeft | Part::HandRight)
+                && floor.height(e.position) > person.top_m - 0.1
+        });
+        let top = match (hand_on_top, head) {
+            (false, _) => Some(person.top_m),
+            (true, Some(h)) => Some(
+                self.points
+                    .iter()
+                    .filter(|p| (p.x - h.x).abs() < 0.1 && (p.z - h.z).abs() < 0.25)
+                    .map(|&p| floor.height(p))
+                    .fold(floor.height(h), f32::max),
+            ),
+            (true, None) => None,
+        };
+        // Beneath the centroid of what is seen, half a body's depth behind it.
+        let spot = |scale: f32| {
+            let centre = person.centroid + person.centroid.normalize_or_zero() * 0.08 * scale;
+            centre - floor.normal * floor.height(centre)
+        };
+        let scale = match (self.settings.scale.or(self.scale), top) {
+            (Some(s), _) => s,
+            (None, Some(top)) if whole => {
+                // The top seen is the outline's, under the crown.
+                let seen = self
+                    .body
+                    .rest_seen_top(spot(top / self.body.height_m), floor.normal);
+                let s = (top / seen).clamp(SIZE_LIMITS.0, SIZE_LIMITS.1);
+                self.scale = Some(s);
+                s
+            }
+            // Not measurable yet (cut off, or arms up and no head found): the body's own
+            // size until the person is seen whole.
+            _ => 1.0,
+        };
+        let targets: Vec<(usize, Vec3, f32)> = ends
+            .iter()
+            .filter_map(|e| {
+                let joint = match e.part {
+                    Part::Head if head.is_some() => KinectJoint::Head,
+                    Part::Head => return None,
+                    Part::HandLeft => KinectJoint::HandLeft,
+                    Part::HandRight => KinectJoint::HandRight,
+                    Part::FootLeft => KinectJoint::FootLeft,
+                    Part::FootRight => KinectJoint::FootRight,
+                    Part::Other => return None,
+                };
+                Some((joint.index(), e.joint, 1.0))
+            })
+            .collect();
+        // Facing the sensor, and facing away (the extrema's left and right swapped): a
+        // person who turned their back while no one was tracked is found so as well.
+        let mut best: Option<(Pose, FitStats)> = None;
+        for away in [prior_away, !prior_away] {
+            let mut pose = self.body.standing_on(spot(scale), floor.normal, scale);
+            let mut targets = targets.clone();
+            if away {
+                let turn = Quat::from_axis_angle(floor.normal, std::f32::consts::PI);
+                let pivot = spot(scale);
+                pose.rotation = (turn * pose.rotation).normalize();
+                pose.translation = pivot + turn * (pose.translation - pivot);
+                for t in &mut targets {
+                    t.0 = mirrored(t.0);
+                }
+            }
+            let n = self.settings.start_iterations;
+            self.fit(frame, person, &mut pose, &targets, n);
+            let fit = self.fit(frame, person, &mut pose, &[], n / 3);
+            let margin = if away == prior_away {
+                0.0
+            } else {
+                self.settings.turn_margin
+            };
+            if best
+                .as_ref()
+                .is_none_or(|(_, b)| score(&fit) > score(b) + margin)
+            {
+                best = Some((pose, fit));
+            }
+        }
+        best.unwrap_or_else(|| unreachable!())
+    }
+
+    /// Whether the body in `pose` has its back to the sensor (its left on the sensor's +X).
+    pub(super) fn faces_away(&mut self, pose: &Pose) -> bool {
+        self.body.pose_into(pose, &mut self.posed);
+        let j = self.body.kinect_joints(&self.posed);
+        let at = |k: KinectJoint| j[k.index()];
+        let across = (at(KinectJoint::HipLeft) - at(KinectJoint::HipRight))
+            + (at(KinectJoint::ShoulderLeft) - at(KinectJoint::ShoulderRight));
+        across.x > 0.0
+    }
+}
+
+/// A turn smaller than this between two frames (degrees) is the fit's jitter as often as the
+/// person's turn, and is not carried on.
+const MIN_TURN_CARRIED: f32 = 3.0;
+
+/// `pose` turned on about the vertical as it turned since `before` (`share` of that turn): a
+/// dancer spinning keeps spinning, and a turn of the nearly round trunk about its own axis is
+/// what depth alone shows least. Only the turn about `up`: the rest of the root's motion is
+/// the fit's own jitter as often as the person's.
+pub(super) fn carry_turn(pose: &mut Pose, before: &Pose, up: Vec3, share: f32) {
+    if share <= 0.0 {
+        return;
+    }
+    let delta = (pose.rotation * before.rotation.inverse()).normalize();
+    // The twist of `delta` about `up` (swing-twist decomposition).
+    let (axis, w) = (Vec3::new(delta.x, delta.y, delta.z), delta.w);
+    let along = up * axis.dot(up);
+    // The shorter way round (`q` and `-q` are the same turn).
+    let twist = Quat::from_xyzw(along.x, along.y, along.z, w) * w.signum();
+    if twist.length_squared() < 1e-8 {
+        return;
+    }
+    let twist = twist.normalize();
+    if twist.angle_between(Quat::IDENTITY) < MIN_TURN_CARRIED.to_radians() {
+        return;
+    }
+    let twist = Quat::IDENTITY.slerp(twist, share);
+    let turned = (twist * pose.rotation).normalize();
+    if turned.is_finite() {
+        pose.rotation = turned;
+    }
+}
+
+/// The Kinect joint index of the other side's joint (the same for the middle ones).
+fn mirrored(k: usize) -> usize {
+    use KinectJoint::*;
+    let other = |j: KinectJoint| match j {
+        ShoulderLeft => ShoulderRight,
+        ElbowLeft => ElbowRight,
+        WristLeft => WristRight,
+        HandLeft => HandRight,
+        HipLeft => HipRight,
+        KneeLeft => KneeRight,
+        AnkleLeft => AnkleRight,
+        FootLeft => FootRight,
+        ShoulderRight => ShoulderLeft,
+        ElbowRight => ElbowLeft,
+        WristRight => WristLeft,
+        HandRight => HandLeft,
+        HipRight => HipLeft,
+        KneeRight => KneeLeft,
+        AnkleRight => AnkleLeft,
+        FootRight => FootLeft,
+        j => j,
+    };
+    KinectJoint::ALL.get(k).map_or(k, |&j| other(j).index())
+}
