@@ -45,6 +45,8 @@
 #   CLIPS    only these clips, e.g. CLIPS="07_01 141_16" (default: all of INDEX.tsv)
 #   GARMENTS only these garment choices, e.g. GARMENTS="none tshirt" (default: none tshirt
 #            sundress); a recording's seed is the whole matrix's either way
+#   SEED_OFFSET added to every recording's noise seed (default 0): the same motions and bodies
+#            under other noise, to check a change on recordings it was not tuned on
 set -euo pipefail
 
 die() {
@@ -57,6 +59,8 @@ if [[ $# -lt 1 || $# -gt 2 || $1 == -h || $1 == --help ]]; then
     exit 2
 fi
 FRAMES=${2:-150}
+SEED_OFFSET=${SEED_OFFSET:-0}
+[[ $SEED_OFFSET =~ ^[0-9]+$ ]] || die "SEED_OFFSET must be a whole number, not: $SEED_OFFSET"
 # The person's distance from the sensor, metres (3 m: a 1.8 m person with raised arms stays
 # below the image's top edge with the sensor 0.8 m up; 2.5 m cuts heads and hands).
 DISTANCE=${DISTANCE:-3.0}
@@ -229,7 +233,7 @@ for clip in "${SELECTED[@]}"; do
                 echo "$tag: incomplete folder, recording it again"
                 rm -rf -- "$dir"
             fi
-            seed=$((1 + (row * ${#BODIES[@]} + bi) * ${#ALL_GARMENTS[@]} + gi))
+            seed=$((1 + (row * ${#BODIES[@]} + bi) * ${#ALL_GARMENTS[@]} + gi + SEED_OFFSET))
             # No more frames than the clip lasts: past its end the clip starts again, and the
             # jump back to its first pose is no motion a person makes.
             frames=$(clip_frames "$clip")
