@@ -473,12 +473,15 @@ impl Tracker {
                 };
                 if fit.inliers < settings.min_inliers || fit.outside > settings.max_outside {
                     let away = self.faces_away(&pose);
+                    let support = self.fitter.support.clone();
                     let (fresh, fresh_fit) = self.start(frame, &person, away);
                     started = true;
                     self.previous = None;
                     if score(&fresh_fit) > score(&fit) {
                         (fresh, fresh_fit)
                     } else {
+                        // The kept fit's evidence per capsule is its own, not the start's.
+                        self.fitter.support = support;
                         (pose, fit)
                     }
                 } else {

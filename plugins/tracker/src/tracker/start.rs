@@ -94,35 +94,45 @@ impl Tracker {
             .collect();
         // Facing the sensor, and facing away (the extrema's left and right swapped): a
         // person who turned their back while no one was tracked is found so as well.
-        let mut best: Option<(Pose, FitStats)> = None;
-        for away in [prior_away, !prior_away] {
-            let mut pose = self.body.standing_on(spot(scale), floor.normal, scale);
-            let mut targets = targets.clone();
-            if away {
-                let turn = Quat::from_axis_angle(floor.normal, std::f32::consts::PI);
-                let pivot = spot(scale);
-                pose.rotation = (turn * pose.rotation).normalize();
-                pose.translation = pivot + turn * (pose.translation - pivot);
-                for t in &mut targets {
-                    t.0 = mirrored(t.0);
-                }
-            }
-            let n = self.settings.start_iterations;
-            self.fit(frame, person, &mut pose, &targets, n);
-            let fit = self.fit(frame, person, &mut pose, &[], n / 3);
-            let margin = if away == prior_away {
-                0.0
-            } else {
-                self.settings.turn_margin
-            };
-            if best
-                .as_ref()
-                .is_none_or(|(_, b)| score(&fit) > score(b) + margin)
-            {
-                best = Some((pose, fit));
+        let spot = spot(scale);
+        let (pose, fit) = self.start_facing(frame, person, spot, scale, &targets, prior_away);
+        let support = self.fitter.support.clone();
+        let (other, other_fit) =
+            self.start_facing(frame, person, spot, scale, &targets, !prior_away);
+        if score(&other_fit) > score(&fit) + self.settings.turn_margin {
+            (other, other_fit)
+        } else {
+            // The kept fit's evidence per capsule (the joints' confidences) is its own.
+            self.fitter.support = support;
+            (pose, fit)
+        }
+    }
+
+    /// The body standing at `spot`, facing the sensor or `away` from it, pulled to `targets`
+    /// (named as for a body facing the sensor), then fitted to the depth alone.
+    fn start_facing(
+        &mut self,
+        frame: &DepthFrame,
+        person: &Segmentation,
+        spot: Vec3,
+        scale: f32,
+        targets: &[(usize, Vec3, f32)],
+        away: bool,
+    ) -> (Pose, FitStats) {
+        let mut pose = self.body.standing_on(spot, person.floor.normal, scale);
+        let mut targets = targets.to_vec();
+        if away {
+            let turn = Quat::from_axis_angle(person.floor.normal, std::f32::consts::PI);
+            pose.rotation = (turn * pose.rotation).normalize();
+            pose.translation = spot + turn * (pose.translation - spot);
+            for t in &mut targets {
+                t.0 = mirrored(t.0);
             }
         }
-        best.unwrap_or_else(|| unreachable!())
+        let n = self.settings.start_iterations;
+        self.fit(frame, person, &mut pose, &targets, n);
+        let fit = self.fit(frame, person, &mut pose, &[], n / 3);
+        (pose, fit)
     }
 
     /// Whether the body in `pose` has its back to the sensor (its left on the sensor's +X).
