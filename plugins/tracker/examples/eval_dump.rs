@@ -25,6 +25,7 @@ use fitroom_depth::DepthCamera;
 use fitroom_depth::fakenect::Recording;
 use fitroom_depth::truth::read_truth;
 use fitroom_tracker::eval::Evaluation;
+use fitroom_tracker::kinect::facing_degrees;
 use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
 use glam::Vec3;
 
@@ -137,8 +138,8 @@ fn main() -> Result<(), Error> {
                 t.fit.outside,
                 t.fit.mean_residual_m * 1000.0,
                 t.pose.scale,
-                yaw(&tracked),
-                yaw(&joints),
+                facing_degrees(&tracked),
+                facing_degrees(&joints),
                 errors.join(" ")
             );
         }
@@ -180,13 +181,6 @@ fn main() -> Result<(), Error> {
         serde_json::to_string_pretty(&eval.report(tracker.starts))?
     );
     Ok(())
-}
-
-/// The direction the person faces about the vertical, degrees (0: towards the camera), from
-/// the hips' and shoulders' left-right line.
-fn yaw(j: &[Vec3]) -> f32 {
-    let across = (j[12] - j[16]) + (j[4] - j[8]);
-    across.z.atan2(-across.x).to_degrees()
 }
 
 /// This thread's CPU time, ns.

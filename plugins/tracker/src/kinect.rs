@@ -5,6 +5,16 @@ use fitroom_body::{BodyModel, RigidTransform};
 use fitroom_sensor::KinectJoint;
 use glam::Vec3;
 
+/// The way a skeleton (20 joints in [`KinectJoint::ALL`] order) faces about the vertical,
+/// degrees: 0 towards the sensor, ±180 with its back to it. From the hips' and shoulders'
+/// left-right line (a person facing the sensor has their left at -X).
+pub fn facing_degrees(joints: &[Vec3]) -> f32 {
+    let at = |j: KinectJoint| joints.get(j.index()).copied().unwrap_or(Vec3::ZERO);
+    let across = (at(KinectJoint::HipLeft) - at(KinectJoint::HipRight))
+        + (at(KinectJoint::ShoulderLeft) - at(KinectJoint::ShoulderRight));
+    across.z.atan2(-across.x).to_degrees()
+}
+
 /// The avatar bone whose head is at each Kinect joint (MakeHuman's `game_engine` rig; `_l`
 /// is the person's left, as the Kinect's `Left`), in [`KinectJoint::ALL`] order.
 pub const JOINT_BONES: [(KinectJoint, &str); 20] = [
@@ -102,5 +112,26 @@ mod tests {
             assert_eq!(joint.name(), fitroom_depth::truth::JOINT_NAMES[i]);
         }
         assert_eq!(DRIVER_BONES.len(), KinectJoint::COUNT);
+    }
+
+    /// A person facing the sensor has their left at -X; turned about the vertical by an
+    /// angle, the facing is that angle's size.
+    #[test]
+    fn facing_is_the_turn_about_the_vertical() {
+        let mut joints = [Vec3::ZERO; KinectJoint::COUNT];
+        for (joint, x, y) in [
+            (KinectJoint::ShoulderLeft, -0.2, 0.5),
+            (KinectJoint::ShoulderRight, 0.2, 0.5),
+            (KinectJoint::HipLeft, -0.1, 0.0),
+            (KinectJoint::HipRight, 0.1, 0.0),
+        ] {
+            joints[joint.index()] = Vec3::new(x, y, 0.0);
+        }
+        for degrees in [0.0f32, 30.0, 90.0, 150.0, 180.0] {
+            let turn = glam::Quat::from_rotation_y(degrees.to_radians());
+            let turned: Vec<Vec3> = joints.iter().map(|&p| turn * p).collect();
+            let found = facing_degrees(&turned).abs();
+            assert!((found - degrees).abs() < 1e-3, "{degrees}: {found}");
+        }
     }
 }

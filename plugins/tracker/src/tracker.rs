@@ -199,8 +199,9 @@ pub struct Tracker {
     posed: Posed,
     points: Vec<Vec3>,
     pose: Option<Pose>,
-    /// The pose of the frame before `pose`'s, when both were followed (the body's motion).
-    previous: Option<Pose>,
+    /// The root's rotation in the frame before `pose`'s, when both were followed (the body's
+    /// turn, [`carry_turn`]).
+    previous: Option<Quat>,
     /// The person's size (the body's scale), measured when they were first seen whole.
     scale: Option<f32>,
     /// The sizes the frames tracked well imply ([`Self::refine_size`]).
@@ -460,8 +461,8 @@ impl Tracker {
         let previous = self.previous.take();
         let (pose, fit) = match self.pose.take() {
             Some(mut pose) => {
-                let last = pose.clone();
-                if let Some(before) = &previous {
+                let last = pose.rotation;
+                if let Some(before) = previous {
                     carry_turn(&mut pose, before, person.floor.normal, settings.carry_turn);
                 }
                 self.previous = Some(last);

@@ -10,7 +10,7 @@ mod common;
 
 use common::{Body, Turns, body, render, scene};
 use fitroom_depth::synthetic::Label;
-use fitroom_sensor::KinectJoint;
+use fitroom_tracker::kinect::facing_degrees as facing;
 use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
 use glam::Vec3;
 
@@ -21,15 +21,6 @@ const POSE: Turns = &[
     ("thigh_l", Vec3::X, -20.0),
     ("calf_l", Vec3::X, 30.0),
 ];
-
-/// The way the person faces about the vertical, degrees (0: the sensor), from the hips' and
-/// shoulders' left-right line.
-fn facing(joints: &[Vec3]) -> f32 {
-    let at = |j: KinectJoint| joints[j.index()];
-    let across = (at(KinectJoint::HipLeft) - at(KinectJoint::HipRight))
-        + (at(KinectJoint::ShoulderLeft) - at(KinectJoint::ShoulderRight));
-    across.z.atan2(-across.x).to_degrees()
-}
 
 fn angle_between(a: f32, b: f32) -> f32 {
     let d = (a - b).rem_euclid(360.0);

@@ -13,6 +13,7 @@ use glam::{Quat, Vec3};
 use super::{HEIGHT, SIZE_LIMITS, Tracker, score};
 use crate::extrema::{Part, geodesic_extrema};
 use crate::fit::FitStats;
+use crate::kinect::facing_degrees;
 use crate::model::Pose;
 use crate::segment::Segmentation;
 
@@ -126,7 +127,9 @@ impl Tracker {
             pose.rotation = (turn * pose.rotation).normalize();
             pose.translation = spot + turn * (pose.translation - spot);
             for t in &mut targets {
-                t.0 = mirrored(t.0);
+                t.0 = KinectJoint::ALL
+                    .get(t.0)
+                    .map_or(t.0, |j| j.mirror().index());
             }
         }
         let n = self.settings.start_iterations;
@@ -135,14 +138,10 @@ impl Tracker {
         (pose, fit)
     }
 
-    /// Whether the body in `pose` has its back to the sensor (its left on the sensor's +X).
+    /// Whether the body in `pose` has its back to the sensor.
     pub(super) fn faces_away(&mut self, pose: &Pose) -> bool {
         self.body.pose_into(pose, &mut self.posed);
-        let j = self.body.kinect_joints(&self.posed);
-        let at = |k: KinectJoint| j[k.index()];
-        let across = (at(KinectJoint::HipLeft) - at(KinectJoint::HipRight))
-            + (at(KinectJoint::ShoulderLeft) - at(KinectJoint::ShoulderRight));
-        across.x > 0.0
+        facing_degrees(&self.body.kinect_joints(&self.posed)).abs() > 90.0
     }
 }
 
@@ -150,15 +149,16 @@ impl Tracker {
 /// person's turn, and is not carried on.
 const MIN_TURN_CARRIED: f32 = 3.0;
 
-/// `pose` turned on about the vertical as it turned since `before` (`share` of that turn): a
+/// `pose` turned on about the vertical as its root turned since `before` (the root's rotation
+/// a frame earlier; `share` of that turn): a
 /// dancer spinning keeps spinning, and a turn of the nearly round trunk about its own axis is
 /// what depth alone shows least. Only the turn about `up`: the rest of the root's motion is
 /// the fit's own jitter as often as the person's.
-pub(super) fn carry_turn(pose: &mut Pose, before: &Pose, up: Vec3, share: f32) {
+pub(super) fn carry_turn(pose: &mut Pose, before: Quat, up: Vec3, share: f32) {
     if share <= 0.0 {
         return;
     }
-    let delta = (pose.rotation * before.rotation.inverse()).normalize();
+    let delta = (pose.rotation * before.inverse()).normalize();
     // The twist of `delta` about `up` (swing-twist decomposition).
     let (axis, w) = (Vec3::new(delta.x, delta.y, delta.z), delta.w);
     let along = up * axis.dot(up);
@@ -176,29 +176,4 @@ pub(super) fn carry_turn(pose: &mut Pose, before: &Pose, up: Vec3, share: f32) {
     if turned.is_finite() {
         pose.rotation = turned;
     }
-}
-
-/// The Kinect joint index of the other side's joint (the same for the middle ones).
-fn mirrored(k: usize) -> usize {
-    use KinectJoint::*;
-    let other = |j: KinectJoint| match j {
-        ShoulderLeft => ShoulderRight,
-        ElbowLeft => ElbowRight,
-        WristLeft => WristRight,
-        HandLeft => HandRight,
-        HipLeft => HipRight,
-        KneeLeft => KneeRight,
-        AnkleLeft => AnkleRight,
-        FootLeft => FootRight,
-        ShoulderRight => ShoulderLeft,
-        ElbowRight => ElbowLeft,
-        WristRight => WristLeft,
-        HandRight => HandLeft,
-        HipRight => HipLeft,
-        KneeRight => KneeLeft,
-        AnkleRight => AnkleLeft,
-        FootRight => FootLeft,
-        j => j,
-    };
-    KinectJoint::ALL.get(k).map_or(k, |&j| other(j).index())
 }
