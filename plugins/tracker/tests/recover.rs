@@ -96,3 +96,28 @@ fn legs_that_crossed_are_uncrossed() {
     );
     assert!(with < 0.03, "the legs still crossed: {with:.3} m");
 }
+
+/// The left hand brought from the side to before the belly between two frames (the forearm
+/// bent forward and swung across, as in a walk's arm swing or a hand on the stomach): the
+/// hand shows no extremum there, and followed from the last frame the fit folds the forearm
+/// up along the upper arm.
+#[test]
+fn a_hand_brought_before_the_belly_is_found_again() {
+    use KinectJoint::*;
+    let before_belly: Turns = &[
+        ("lowerarm_l", Vec3::X, -90.0),
+        ("upperarm_l", Vec3::Y, -50.0),
+        ("upperarm_l", Vec3::X, -15.0),
+    ];
+    let (without, with) = jump(&[], before_belly, &[ElbowLeft, WristLeft, HandLeft]);
+    println!(
+        "hand before the belly: {:.0} mm without recovery, {:.0} mm with",
+        without * 1000.0,
+        with * 1000.0
+    );
+    assert!(
+        without > 0.1,
+        "the case should lose the forearm: {without:.3} m"
+    );
+    assert!(with < 0.05, "the forearm not found again: {with:.3} m");
+}

@@ -3,18 +3,21 @@
 //! went behind the body or folded into the chest stays there while the data points of the
 //! real arm are left unexplained. Such a limb is suspected (legs whose knees or ankles lie in
 //! the other's order than the hips; a limb with almost no data points on it; every limb when
-//! much of the person is left unexplained) and a second
+//! much of the person is left unexplained; an arm folded up on itself) and a second
 //! hypothesis is fitted: the limb (both legs, for crossed legs) back at rest and pulled to
-//! the geodesic extrema of its hand or foot, as a start is. The hypothesis is kept when it
-//! explains the frame better.
+//! the geodesic extrema of its hand or foot, as a start is, and for an arm also with the
+//! forearm bent forward. A hypothesis is kept when it explains the frame better.
+
+use std::f32::consts::FRAC_PI_2;
 
 use fitroom_depth::DepthFrame;
 use fitroom_sensor::KinectJoint;
+use glam::Quat;
 
 use super::{Tracker, score};
 use crate::extrema::{Part, geodesic_extrema};
 use crate::fit::{FitStats, Observation};
-use crate::model::Pose;
+use crate::model::{JointKind, Pose};
 use crate::segment::Segmentation;
 
 /// A limb and the rig bones that move it, shoulder or hip first.
@@ -51,6 +54,15 @@ impl Limb {
         }
     }
 
+    /// An arm's shoulder (`None` for a leg).
+    fn shoulder(self) -> Option<KinectJoint> {
+        match self {
+            Self::ArmLeft => Some(KinectJoint::ShoulderLeft),
+            Self::ArmRight => Some(KinectJoint::ShoulderRight),
+            _ => None,
+        }
+    }
+
     fn end_joint(self) -> KinectJoint {
         match self {
             Self::ArmLeft => KinectJoint::HandLeft,
@@ -67,6 +79,9 @@ const MIN_LIMB_SUPPORT: u32 = 6;
 const MAX_OUTLIERS: f32 = 0.03;
 /// Legs are crossed when a knee or an ankle lies this far on the other leg's side, metres.
 const CROSSED_M: f32 = 0.02;
+/// An arm whose forearm is turned more than this from its upper arm is suspected (the fit
+/// folds a forearm it lost up into the upper arm and the chest).
+const FOLDED_RAD: f32 = 100.0 * std::f32::consts::PI / 180.0;
 /// A hypothesis replaces the followed fit when its score is better by this much.
 const BETTER_BY: f32 = 0.01;
 
@@ -86,6 +101,17 @@ impl Tracker {
             out.push(vec![Limb::LegLeft, Limb::LegRight]);
         }
         let support = self.bone_support();
+        // An arm folded up on itself: a forearm the fit lost (its points taken by the trunk,
+        // a T-shirt's front standing off the body) ends up there.
+        let folded = |limb: Limb| {
+            let [elbow, wrist, _] = limb.joints();
+            let Some(shoulder) = limb.shoulder() else {
+                return false;
+            };
+            let upper = at(elbow) - at(shoulder);
+            let fore = at(wrist) - at(elbow);
+            upper.angle_between(fore) > FOLDED_RAD
+        };
         for limb in Limb::ALL {
             let seen: u32 = limb.joints()[..2]
                 .iter()
@@ -93,7 +119,7 @@ impl Tracker {
                 .sum();
             // A part of the person left unexplained: any limb may be the one missing there.
             let unexplained = fit.outliers > MAX_OUTLIERS;
-            if (seen < MIN_LIMB_SUPPORT || unexplained)
+            if (seen < MIN_LIMB_SUPPORT || unexplained || folded(limb))
                 && !out.iter().any(|s: &Vec<Limb>| s.contains(&limb))
             {
                 out.push(vec![limb]);
@@ -117,14 +143,36 @@ impl Tracker {
         }
         let ends = geodesic_extrema(frame, person);
         let (mut best, mut best_fit) = (pose, fit);
+        // Each suspect at rest, pulled to its extrema; an arm also with its forearm bent
+        // forward a right angle (a hand in front of the belly shows no extremum).
+        let mut tries: Vec<(Vec<Limb>, bool)> = Vec::new();
         for limbs in suspects {
+            if let [limb] = limbs[..]
+                && limb.shoulder().is_some()
+            {
+                tries.push((vec![limb], true));
+            }
+            tries.push((limbs, false));
+        }
+        for (limbs, bent) in tries {
             let mut candidate = best.clone();
             let mut targets = Vec::new();
             for &limb in &limbs {
                 for j in limb.joints() {
-                    candidate.local[self.body.drivers[j.index()]] = glam::Quat::IDENTITY;
+                    candidate.local[self.body.drivers[j.index()]] = Quat::IDENTITY;
                 }
-                if let Some(e) = ends.iter().find(|e| e.part == limb.end()) {
+                if bent {
+                    let forearm = self.body.drivers[limb.joints()[1].index()];
+                    if let Some(JointKind::Hinge { axis, .. }) = self
+                        .body
+                        .joints
+                        .iter()
+                        .find(|j| j.bone == forearm)
+                        .map(|j| j.kind)
+                    {
+                        candidate.local[forearm] = Quat::from_axis_angle(axis, FRAC_PI_2);
+                    }
+                } else if let Some(e) = ends.iter().find(|e| e.part == limb.end()) {
                     targets.push((limb.end_joint().index(), e.joint, 1.0));
                 }
             }
