@@ -56,6 +56,28 @@ fn jump(before: Turns, after: Turns, joints: &[KinectJoint]) -> (f32, f32) {
     (out[0], out[1])
 }
 
+/// Runs [`jump`] and checks that without recovery the case loses its limbs (mean error over
+/// `lost_above` metres) and that recovery finds them again (under `found_below`).
+fn found_again(
+    case: &str,
+    (before, after): (Turns, Turns),
+    joints: &[KinectJoint],
+    lost_above: f32,
+    found_below: f32,
+) {
+    let (without, with) = jump(before, after, joints);
+    println!(
+        "{case}: {:.0} mm without recovery, {:.0} mm with",
+        without * 1000.0,
+        with * 1000.0
+    );
+    assert!(
+        without > lost_above,
+        "{case}: the case should lose the limb: {without:.3} m"
+    );
+    assert!(with < found_below, "{case}: not found again: {with:.3} m");
+}
+
 /// The left arm, out to the side, swung across the body in front of the face between two
 /// frames: followed from the last frame, the fit folds the arm down over the chest and leaves
 /// the real one unexplained.
@@ -66,17 +88,8 @@ fn an_arm_swung_across_the_body_is_found_again() {
         ("upperarm_l", Vec3::X, -80.0),
         ("upperarm_l", Vec3::Y, -60.0),
     ];
-    let (without, with) = jump(ARMS_OUT, across, &[ElbowLeft, WristLeft, HandLeft]);
-    println!(
-        "arm across: {:.0} mm without recovery, {:.0} mm with",
-        without * 1000.0,
-        with * 1000.0
-    );
-    assert!(
-        without > 0.1,
-        "the case should lose the arm: {without:.3} m"
-    );
-    assert!(with < 0.05, "the arm not found again: {with:.3} m");
+    let arm = [ElbowLeft, WristLeft, HandLeft];
+    found_again("arm across", (ARMS_OUT, across), &arm, 0.1, 0.05);
 }
 
 /// A step across, the legs' order swapped between two frames: followed, the legs cross.
@@ -84,17 +97,8 @@ fn an_arm_swung_across_the_body_is_found_again() {
 fn legs_that_crossed_are_uncrossed() {
     use KinectJoint::*;
     let step: Turns = &[("thigh_r", Vec3::Z, 25.0), ("thigh_l", Vec3::X, -30.0)];
-    let (without, with) = jump(&[], step, &[KneeLeft, AnkleLeft, KneeRight, AnkleRight]);
-    println!(
-        "step across: {:.0} mm without recovery, {:.0} mm with",
-        without * 1000.0,
-        with * 1000.0
-    );
-    assert!(
-        without > 0.08,
-        "the case should cross the legs: {without:.3} m"
-    );
-    assert!(with < 0.03, "the legs still crossed: {with:.3} m");
+    let legs = [KneeLeft, AnkleLeft, KneeRight, AnkleRight];
+    found_again("step across", (&[], step), &legs, 0.08, 0.03);
 }
 
 /// The left hand brought from the side to before the belly between two frames (the forearm
@@ -109,15 +113,12 @@ fn a_hand_brought_before_the_belly_is_found_again() {
         ("upperarm_l", Vec3::Y, -50.0),
         ("upperarm_l", Vec3::X, -15.0),
     ];
-    let (without, with) = jump(&[], before_belly, &[ElbowLeft, WristLeft, HandLeft]);
-    println!(
-        "hand before the belly: {:.0} mm without recovery, {:.0} mm with",
-        without * 1000.0,
-        with * 1000.0
+    let arm = [ElbowLeft, WristLeft, HandLeft];
+    found_again(
+        "hand before the belly",
+        (&[], before_belly),
+        &arm,
+        0.1,
+        0.05,
     );
-    assert!(
-        without > 0.1,
-        "the case should lose the forearm: {without:.3} m"
-    );
-    assert!(with < 0.05, "the forearm not found again: {with:.3} m");
 }
