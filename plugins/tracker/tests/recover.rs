@@ -12,15 +12,16 @@ use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
 use glam::Vec3;
 
 /// Mean error (m) of `joints` over the last 10 of 30 frames: 10 frames of `before`, then
-/// `after` at once, with and without recovery.
-fn jump(before: Turns, after: Turns, joints: &[KinectJoint]) -> (f32, f32) {
+/// `after` at once, with and without recovery; the fit's `outside_weight` as given.
+fn jump(before: Turns, after: Turns, joints: &[KinectJoint], outside: f32) -> (f32, f32) {
     let person = body();
     let mut out = [0.0; 2];
     for (k, recover) in [false, true].into_iter().enumerate() {
-        let settings = TrackerSettings {
+        let mut settings = TrackerSettings {
             recover,
             ..TrackerSettings::default()
         };
+        settings.fit.outside_weight = outside;
         let track = TrackBody::new(&person.model, &person.model.positions).expect("body");
         let mut tracker = Tracker::new(track, settings);
         let (mut sum, mut n) = (0.0, 0);
@@ -65,7 +66,25 @@ fn found_again(
     lost_above: f32,
     found_below: f32,
 ) {
-    let (without, with) = jump(before, after, joints);
+    let outside = TrackerSettings::default().fit.outside_weight;
+    found_again_with(
+        case,
+        (before, after),
+        joints,
+        (lost_above, found_below),
+        outside,
+    );
+}
+
+/// [`found_again`] with the fit's `outside_weight` given.
+fn found_again_with(
+    case: &str,
+    (before, after): (Turns, Turns),
+    joints: &[KinectJoint],
+    (lost_above, found_below): (f32, f32),
+    outside: f32,
+) {
+    let (without, with) = jump(before, after, joints, outside);
     println!(
         "{case}: {:.0} mm without recovery, {:.0} mm with",
         without * 1000.0,
@@ -102,23 +121,44 @@ fn legs_that_crossed_are_uncrossed() {
 }
 
 /// The left hand brought from the side to before the belly between two frames (the forearm
-/// bent forward and swung across, as in a walk's arm swing or a hand on the stomach): the
-/// hand shows no extremum there, and followed from the last frame the fit folds the forearm
-/// up along the upper arm.
+/// bent forward and swung across, as in a walk's arm swing or a hand on the stomach).
+const BEFORE_BELLY: Turns = &[
+    ("lowerarm_l", Vec3::X, -90.0),
+    ("upperarm_l", Vec3::Y, -50.0),
+    ("upperarm_l", Vec3::X, -15.0),
+];
+
+/// The hand before the belly: it shows no extremum there, and followed from the last frame
+/// the fit folds the forearm up along the upper arm and gives the hand's points to the trunk;
+/// recovery finds it.
 #[test]
 fn a_hand_brought_before_the_belly_is_found_again() {
     use KinectJoint::*;
-    let before_belly: Turns = &[
-        ("lowerarm_l", Vec3::X, -90.0),
-        ("upperarm_l", Vec3::Y, -50.0),
-        ("upperarm_l", Vec3::X, -15.0),
-    ];
     let arm = [ElbowLeft, WristLeft, HandLeft];
     found_again(
         "hand before the belly",
-        (&[], before_belly),
+        (&[], BEFORE_BELLY),
         &arm,
         0.1,
         0.05,
     );
+}
+
+/// The same jump with the trunk's data term one-sided (`outside_weight` 0.3, not the
+/// default): the points before the belly lie outside the trunk's skin and weigh less for it,
+/// so the forearm takes them and the followed fit alone keeps the hand; two-sided (the
+/// default), it loses it.
+#[test]
+fn a_hand_before_the_belly_is_kept_by_a_one_sided_trunk_term() {
+    use KinectJoint::*;
+    let arm = [ElbowLeft, WristLeft, HandLeft];
+    let (one_sided, _) = jump(&[], BEFORE_BELLY, &arm, 0.3);
+    let (two_sided, _) = jump(&[], BEFORE_BELLY, &arm, 1.0);
+    println!(
+        "hand before the belly, no recovery: {:.0} mm one-sided, {:.0} mm two-sided",
+        one_sided * 1000.0,
+        two_sided * 1000.0
+    );
+    assert!(one_sided < 0.05, "one-sided: {one_sided:.3} m");
+    assert!(two_sided > 0.1, "two-sided: {two_sided:.3} m");
 }
