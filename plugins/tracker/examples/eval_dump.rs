@@ -11,7 +11,9 @@
 //!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
-//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`: override the settings.
+//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ASYM` (the trunk's outside weight): override the settings;
+//! * `PARTS=F.forest`: a body-part forest's joint proposals as one more hypothesis for a
+//!   limb suspected lost (grow one with the `parts` example).
 //!
 //! CPU time per frame (this thread's, from `/proc/thread-self/schedstat`: this host's wall
 //! time is noisier) goes to stderr.
@@ -70,6 +72,12 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("TURN_MARGIN") {
         s.turn_margin = v;
     }
+    if let Some(v) = env("ASYM") {
+        s.fit.outside_weight = v;
+    }
+    if let Some(v) = env("PMINW") {
+        s.parts_min_weight = v;
+    }
     s.segment.wall = std::env::var("NO_WALL").is_err();
     s.scale = env("SCALE");
     s.recover = std::env::var("NO_RECOVER").is_err();
@@ -94,6 +102,10 @@ fn main() -> Result<(), Error> {
     } else {
         Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?
     };
+    if let Ok(path) = std::env::var("PARTS") {
+        let forest = fitroom_tracker::bodyparts::Forest::read(&mut std::fs::File::open(path)?)?;
+        tracker = tracker.with_parts(std::sync::Arc::new(forest));
+    }
     let recording = Recording::open(&dir)?;
     let truth = read_truth(&dir)?.ok_or("the recording has no ground truth")?;
     let picture_at: Option<usize> = std::env::var("PPM_FRAME").ok().and_then(|v| v.parse().ok());

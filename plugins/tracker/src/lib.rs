@@ -1,12 +1,14 @@
 //! Seeing the person in the depth stream, without a proprietary SDK (libfreenect gives depth
 //! only): [`floor`] finds the floor plane, [`segment`] the person's pixels (the user map the
 //! Kinect SDK gave seed 000), [`extrema`] head, hands and feet without a prior pose (to
-//! start and recover the tracker). The skeleton tracker will build on them.
+//! start and recover the tracker), [`bodyparts`] each pixel's body part from a forest grown on
+//! synthetic images (joint proposals, opt-in); [`tracker`] fits the skeleton to each frame.
 //!
 //! The `plugin` feature adds [`plugin::TrackerPlugin`]: the user map of each new depth frame.
 
 #![forbid(unsafe_code)]
 
+pub mod bodyparts;
 pub mod draw;
 pub mod eval;
 pub mod extrema;

@@ -15,6 +15,7 @@ use fitroom_sensor::{JointSample, KinectJoint, SensorFrame};
 use glam::{Quat, Vec3};
 use serde::Serialize;
 
+use crate::bodyparts::{Forest, PartScratch, Proposal, ProposalSettings, propose};
 use crate::fit::{FitSettings, FitStats, Fitter, Observation};
 use crate::model::{ModelError, Pose, Posed, TrackBody};
 use crate::segment::{SegmentSettings, Segmentation, Segmenter};
@@ -62,6 +63,11 @@ pub struct TrackerSettings {
     /// their back to the sensor) is taken only when it explains the frame better by this
     /// ([`score`]).
     pub turn_margin: f32,
+    /// How the body-part forest's joint proposals are made (with a forest,
+    /// [`Tracker::with_parts`]); proposals lighter than `parts_min_weight` (part probability
+    /// times depth², m²) are not used.
+    pub parts: ProposalSettings,
+    pub parts_min_weight: f32,
 }
 
 impl Default for TrackerSettings {
@@ -80,6 +86,8 @@ impl Default for TrackerSettings {
             recover: true,
             carry_turn: 1.0,
             turn_margin: 0.06,
+            parts: ProposalSettings::default(),
+            parts_min_weight: 2.0,
         }
     }
 }
@@ -230,6 +238,11 @@ pub struct Tracker {
     pub shape_error: Option<String>,
     /// The time of the search for the build, ms, if one ran in the last frame tracked.
     pub search_ms: Option<f64>,
+    /// The body-part forest, if the tracker uses one, its buffers and this frame's joint
+    /// proposals.
+    parts: Option<Arc<Forest>>,
+    part_scratch: PartScratch,
+    proposals: Vec<Proposal>,
 }
 
 impl Tracker {
@@ -259,6 +272,26 @@ impl Tracker {
             shape: None,
             shape_error: None,
             search_ms: None,
+            parts: None,
+            part_scratch: PartScratch::default(),
+            proposals: Vec::new(),
+        }
+    }
+
+    /// This tracker with joint proposals from `forest` ([`crate::bodyparts`]) for the limbs
+    /// it suspects lost ([`recover`]).
+    pub fn with_parts(mut self, forest: Arc<Forest>) -> Self {
+        self.parts = Some(forest);
+        self
+    }
+
+    /// The forest's joint proposals for `frame` into `self.proposals` (none without a forest).
+    fn propose(&mut self, frame: &DepthFrame, person: &Segmentation) {
+        self.proposals.clear();
+        if let Some(forest) = &self.parts {
+            let s = self.settings;
+            self.proposals = propose(forest, frame, &person.mask, s.parts, &mut self.part_scratch);
+            self.proposals.retain(|q| q.weight >= s.parts_min_weight);
         }
     }
 

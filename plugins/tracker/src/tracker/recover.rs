@@ -6,7 +6,8 @@
 //! much of the person is left unexplained; an arm folded up on itself) and a second
 //! hypothesis is fitted: the limb (both legs, for crossed legs) back at rest and pulled to
 //! the geodesic extrema of its hand or foot, as a start is, and for an arm also with the
-//! forearm bent forward. A hypothesis is kept when it explains the frame better.
+//! forearm bent forward, and, with a body-part forest ([`crate::bodyparts`]), pulled to the
+//! forest's joint proposals. A hypothesis is kept when it explains the frame better.
 
 use std::f32::consts::FRAC_PI_2;
 
@@ -71,6 +72,17 @@ impl Limb {
             Self::LegRight => KinectJoint::FootRight,
         }
     }
+}
+
+/// How a suspected limb is tried again.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Hypothesis {
+    /// At rest, pulled to the geodesic extremum of its end.
+    Extremum,
+    /// An arm at rest with its forearm bent forward a right angle.
+    Bent,
+    /// At rest, pulled to the body-part forest's proposals for its joints.
+    Proposed,
 }
 
 /// A limb with fewer data points on its upper and lower bones than this is suspected lost.
@@ -142,26 +154,42 @@ impl Tracker {
             return (pose, fit);
         }
         let ends = geodesic_extrema(frame, person);
+        self.propose(frame, person);
         let (mut best, mut best_fit) = (pose, fit);
         // Each suspect at rest, pulled to its extrema; an arm also with its forearm bent
-        // forward a right angle (a hand in front of the belly shows no extremum).
-        let mut tries: Vec<(Vec<Limb>, bool)> = Vec::new();
+        // forward a right angle (a hand in front of the belly shows no extremum); with a
+        // body-part forest, a single limb also pulled to the forest's proposals.
+        let mut tries: Vec<(Vec<Limb>, Hypothesis)> = Vec::new();
+        let proposed = |limb: Limb| {
+            limb.joints()
+                .iter()
+                .any(|j| self.proposals.iter().any(|p| p.joint == j.index()))
+        };
         for limbs in suspects {
-            if let [limb] = limbs[..]
-                && limb.shoulder().is_some()
-            {
-                tries.push((vec![limb], true));
+            if let [limb] = limbs[..] {
+                if limb.shoulder().is_some() {
+                    tries.push((vec![limb], Hypothesis::Bent));
+                }
+                if proposed(limb) {
+                    tries.push((vec![limb], Hypothesis::Proposed));
+                }
             }
-            tries.push((limbs, false));
+            tries.push((limbs, Hypothesis::Extremum));
         }
-        for (limbs, bent) in tries {
+        for (limbs, how) in tries {
             let mut candidate = best.clone();
             let mut targets = Vec::new();
             for &limb in &limbs {
                 for j in limb.joints() {
                     candidate.local[self.body.drivers[j.index()]] = Quat::IDENTITY;
                 }
-                if bent {
+                if how == Hypothesis::Proposed {
+                    for j in limb.joints() {
+                        if let Some(p) = self.proposals.iter().find(|p| p.joint == j.index()) {
+                            targets.push((j.index(), p.position, 1.0));
+                        }
+                    }
+                } else if how == Hypothesis::Bent {
                     let forearm = self.body.drivers[limb.joints()[1].index()];
                     if let Some(JointKind::Hinge { axis, .. }) = self
                         .body
