@@ -6,7 +6,8 @@
 //! proposes where its joint is.
 //!
 //! The forest is grown on synthetic depth images of random bodies in random poses
-//! ([`synth`], [`train`]; `fitroom track parts train`), never on the evaluation's clips.
+//! ([`synth`], [`train`]; the `parts` example of this crate grows one), never on the
+//! evaluation's clips.
 
 pub mod forest;
 pub mod labels;
@@ -27,8 +28,8 @@ pub struct Proposal {
     /// Kinect joint index.
     pub joint: usize,
     pub position: Vec3,
-    /// The part's probability mass near the mode (pixels' worth, each pixel's share by its
-    /// area at its depth relative to 1 m... in pixels at the person's own depth).
+    /// The part's mass within two bandwidths of the mode: each classified pixel's part
+    /// probability times its depth² (its area on the body, up to a constant).
     pub weight: f32,
 }
 

@@ -82,7 +82,7 @@ pub enum ForestError {
     #[error("reading the body-part forest: {0}")]
     Io(#[from] std::io::Error),
     #[error(
-        "not a body-part forest file (bad magic or version); write one with `fitroom track parts train`"
+        "not a body-part forest file (bad magic or version); grow one with `cargo run -p fitroom_tracker --release --example parts -- train F.forest`"
     )]
     Magic,
     #[error("the body-part forest is corrupt: {0}")]

@@ -52,11 +52,11 @@ fn uniform(state: &mut u64, lo: f32, hi: f32) -> f32 {
 }
 
 impl<'a> Synth<'a> {
-    /// `builds` random bodies; everything from `seed`.
+    /// `builds` random bodies (at least one: the default build); everything from `seed`.
     pub fn new(model: &'a BodyModel, builds: usize, seed: u64) -> Self {
         let mut state = seed ^ 0x5eed_b0d1_e5a7_7e11;
         let mut bodies = Vec::with_capacity(builds);
-        for b in 0..builds {
+        for b in 0..builds.max(1) {
             let shape = if b == 0 {
                 Shape::default()
             } else {
