@@ -3,11 +3,12 @@
 
 mod common;
 
+use fitroom_body::BodyModel;
 use fitroom_body::{RigidTransform, forward_kinematics};
 use fitroom_sensor::KinectJoint;
 use fitroom_tracker::bodyparts::forest::{DepthImage, ForestError};
 use fitroom_tracker::bodyparts::labels::vertex_parts;
-use fitroom_tracker::bodyparts::synth::Synth;
+use fitroom_tracker::bodyparts::synth::{LabelledImage, Synth};
 use fitroom_tracker::bodyparts::train::{TrainSettings, train};
 use fitroom_tracker::bodyparts::{Forest, PARTS};
 use fitroom_tracker::kinect::rig_joints;
@@ -55,6 +56,15 @@ fn each_part_gathers_around_its_joint_on_its_side() {
     }
 }
 
+/// `n` labelled images of `builds` random builds, all from `seed`.
+fn images(model: &BodyModel, builds: usize, seed: u64, n: usize) -> Vec<LabelledImage> {
+    let mut synth = Synth::new(model, builds, seed);
+    std::iter::from_fn(|| Some(synth.next_image()))
+        .flatten()
+        .take(n)
+        .collect()
+}
+
 fn settings() -> TrainSettings {
     TrainSettings {
         trees: 2,
@@ -72,18 +82,10 @@ fn settings() -> TrainSettings {
 #[test]
 fn a_forest_grown_on_some_bodies_and_poses_labels_others() {
     let model = common::model();
-    let mut synth = Synth::new(&model, 6, 1);
-    let images: Vec<_> = std::iter::from_fn(|| Some(synth.next_image()))
-        .flatten()
-        .take(80)
-        .collect();
-    let forest = train(&images, PARTS, settings());
+    let training = images(&model, 6, 1, 80);
+    let forest = train(&training, PARTS, settings());
     // Other bodies, poses, places and noise.
-    let mut other = Synth::new(&model, 6, 2);
-    let tests: Vec<_> = std::iter::from_fn(|| Some(other.next_image()))
-        .flatten()
-        .take(12)
-        .collect();
+    let tests = images(&model, 6, 2, 12);
     let (mut right, mut all) = (0usize, 0usize);
     let mut counts = [0usize; PARTS];
     let mut probs = vec![0f32; PARTS];
@@ -127,16 +129,12 @@ fn a_forest_grown_on_some_bodies_and_poses_labels_others() {
 #[test]
 fn a_damaged_forest_file_is_an_error_not_a_panic() {
     let model = common::model();
-    let mut synth = Synth::new(&model, 1, 5);
-    let images: Vec<_> = std::iter::from_fn(|| Some(synth.next_image()))
-        .flatten()
-        .take(4)
-        .collect();
+    let few = images(&model, 1, 5, 4);
     let small = TrainSettings {
         max_depth: 4,
         ..settings()
     };
-    let forest = train(&images, PARTS, small);
+    let forest = train(&few, PARTS, small);
     let mut bytes = Vec::new();
     forest.write(&mut bytes).expect("written to memory");
     assert!(matches!(

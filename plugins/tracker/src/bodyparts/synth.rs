@@ -38,6 +38,59 @@ pub struct LabelledImage {
     pub joints: [Vec3; PARTS],
 }
 
+/// One side's limb bones and the sign that mirrors a turn about Y or Z onto it.
+struct Side {
+    sign: f32,
+    lowerarm: &'static str,
+    hand: &'static str,
+    upperarm: &'static str,
+    calf: &'static str,
+    foot: &'static str,
+    thigh: &'static str,
+    clavicle: &'static str,
+}
+
+const SIDES: [Side; 2] = [
+    Side {
+        sign: 1.0,
+        lowerarm: "lowerarm_l",
+        hand: "hand_l",
+        upperarm: "upperarm_l",
+        calf: "calf_l",
+        foot: "foot_l",
+        thigh: "thigh_l",
+        clavicle: "clavicle_l",
+    },
+    Side {
+        sign: -1.0,
+        lowerarm: "lowerarm_r",
+        hand: "hand_r",
+        upperarm: "upperarm_r",
+        calf: "calf_r",
+        foot: "foot_r",
+        thigh: "thigh_r",
+        clavicle: "clavicle_r",
+    },
+];
+
+/// Local rotations from model-space turns (bone name, axis, degrees) of bones about their
+/// heads, applied in order (a turn listed after a child's carries the child with it). A name
+/// the rig lacks is skipped.
+pub fn turned_locals(model: &BodyModel, rest: &RestPose, turns: &[(&str, Vec3, f32)]) -> Vec<Quat> {
+    let bones = &model.bones;
+    let mut local = vec![Quat::IDENTITY; bones.len()];
+    for &(name, axis, degrees) in turns {
+        let Some(b) = model.bone_index(name) else {
+            continue;
+        };
+        let globals = forward_kinematics(bones, rest, &local, Vec3::ZERO);
+        let q = Quat::from_axis_angle(axis.normalize(), degrees.to_radians());
+        let g = globals[b].rotation;
+        local[b] = (local[b] * (g.inverse() * q * g)).normalize();
+    }
+    local
+}
+
 /// Makes the images.
 pub struct Synth<'a> {
     model: &'a BodyModel,
@@ -97,51 +150,35 @@ impl<'a> Synth<'a> {
     fn random_locals(&mut self, rest: &RestPose) -> Vec<Quat> {
         let s = &mut self.state;
         let mut turns: Vec<(&str, Vec3, f32)> = Vec::new();
-        for (side, sign) in [("l", 1.0f32), ("r", -1.0)] {
-            let bend = |s: &mut u64, lo, hi| uniform(s, lo, hi);
+        for side in &SIDES {
+            let sign = side.sign;
             // Elbow and knee first (hinges about the body's left-right axis at rest).
             let elbow = if next_unit(s) < 0.3 {
-                bend(s, -20.0, 0.0)
+                uniform(s, -20.0, 0.0)
             } else {
-                bend(s, -150.0, 0.0)
+                uniform(s, -150.0, 0.0)
             };
-            turns.push((side_name("lowerarm", side), Vec3::X, elbow));
-            turns.push((side_name("hand", side), Vec3::X, bend(s, -40.0, 40.0)));
-            turns.push((side_name("upperarm", side), Vec3::Y, bend(s, -60.0, 60.0)));
-            turns.push((
-                side_name("upperarm", side),
-                Vec3::Z,
-                sign * bend(s, -25.0, 110.0),
-            ));
-            turns.push((side_name("upperarm", side), Vec3::X, bend(s, -170.0, 50.0)));
+            turns.push((side.lowerarm, Vec3::X, elbow));
+            turns.push((side.hand, Vec3::X, uniform(s, -40.0, 40.0)));
+            turns.push((side.upperarm, Vec3::Y, uniform(s, -60.0, 60.0)));
+            turns.push((side.upperarm, Vec3::Z, sign * uniform(s, -25.0, 110.0)));
+            turns.push((side.upperarm, Vec3::X, uniform(s, -170.0, 50.0)));
             let knee = if next_unit(s) < 0.5 {
-                bend(s, 0.0, 20.0)
+                uniform(s, 0.0, 20.0)
             } else {
-                bend(s, 0.0, 130.0)
+                uniform(s, 0.0, 130.0)
             };
-            turns.push((side_name("calf", side), Vec3::X, knee));
-            turns.push((side_name("foot", side), Vec3::X, bend(s, -25.0, 30.0)));
+            turns.push((side.calf, Vec3::X, knee));
+            turns.push((side.foot, Vec3::X, uniform(s, -25.0, 30.0)));
             let lift = if next_unit(s) < 0.5 {
-                bend(s, -20.0, 15.0)
+                uniform(s, -20.0, 15.0)
             } else {
-                bend(s, -100.0, 35.0)
+                uniform(s, -100.0, 35.0)
             };
-            turns.push((
-                side_name("thigh", side),
-                Vec3::Y,
-                sign * bend(s, -30.0, 30.0),
-            ));
-            turns.push((
-                side_name("thigh", side),
-                Vec3::Z,
-                sign * bend(s, -15.0, 45.0),
-            ));
-            turns.push((side_name("thigh", side), Vec3::X, lift));
-            turns.push((
-                side_name("clavicle", side),
-                Vec3::Z,
-                sign * bend(s, -10.0, 15.0),
-            ));
+            turns.push((side.thigh, Vec3::Y, sign * uniform(s, -30.0, 30.0)));
+            turns.push((side.thigh, Vec3::Z, sign * uniform(s, -15.0, 45.0)));
+            turns.push((side.thigh, Vec3::X, lift));
+            turns.push((side.clavicle, Vec3::Z, sign * uniform(s, -10.0, 15.0)));
         }
         turns.push(("neck_01", Vec3::X, uniform(s, -20.0, 30.0)));
         turns.push(("neck_01", Vec3::Y, uniform(s, -40.0, 40.0)));
@@ -149,18 +186,7 @@ impl<'a> Synth<'a> {
         turns.push(("spine_01", Vec3::X, uniform(s, -15.0, 45.0)));
         turns.push(("spine_01", Vec3::Y, uniform(s, -25.0, 25.0)));
         turns.push(("spine_01", Vec3::Z, uniform(s, -20.0, 20.0)));
-        let bones = &self.model.bones;
-        let mut local = vec![Quat::IDENTITY; bones.len()];
-        for (name, axis, degrees) in turns {
-            let Some(b) = self.model.bone_index(name) else {
-                continue;
-            };
-            let globals = forward_kinematics(bones, rest, &local, Vec3::ZERO);
-            let q = Quat::from_axis_angle(axis, degrees.to_radians());
-            let g = globals[b].rotation;
-            local[b] = (local[b] * (g.inverse() * q * g)).normalize();
-        }
-        local
+        turned_locals(self.model, rest, &turns)
     }
 
     /// The next image: a random body, pose, turn and place. `None` when too little of the
@@ -260,25 +286,5 @@ impl<'a> Synth<'a> {
             metres,
             pixels,
         })
-    }
-}
-
-fn side_name(bone: &str, side: &str) -> &'static str {
-    // The rig's bone names are fixed: a small table avoids allocating per pose.
-    match (bone, side) {
-        ("lowerarm", "l") => "lowerarm_l",
-        ("lowerarm", _) => "lowerarm_r",
-        ("hand", "l") => "hand_l",
-        ("hand", _) => "hand_r",
-        ("upperarm", "l") => "upperarm_l",
-        ("upperarm", _) => "upperarm_r",
-        ("calf", "l") => "calf_l",
-        ("calf", _) => "calf_r",
-        ("foot", "l") => "foot_l",
-        ("foot", _) => "foot_r",
-        ("thigh", "l") => "thigh_l",
-        ("thigh", _) => "thigh_r",
-        ("clavicle", "l") => "clavicle_l",
-        _ => "clavicle_r",
     }
 }

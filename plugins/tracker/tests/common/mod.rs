@@ -9,6 +9,7 @@ use std::path::Path;
 use fitroom_body::{BodyModel, RestPose, RigidTransform, forward_kinematics};
 use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
 use fitroom_depth::{DepthCamera, DepthFrame};
+use fitroom_tracker::bodyparts::synth::turned_locals;
 use fitroom_tracker::kinect::rig_joints;
 use glam::{Affine3A, Quat, Vec3};
 
@@ -69,15 +70,9 @@ impl Body {
 
     /// Local rotations for `turns` scaled by `share` (0: rest, 1: the whole pose).
     pub fn locals(&self, turns: Turns, share: f32) -> Vec<Quat> {
-        let mut local = vec![Quat::IDENTITY; self.model.bones.len()];
-        for &(name, axis, degrees) in turns {
-            let b = self.bone(name);
-            let globals = forward_kinematics(&self.model.bones, &self.rest, &local, Vec3::ZERO);
-            let q = Quat::from_axis_angle(axis.normalize(), (degrees * share).to_radians());
-            let g = globals[b].rotation;
-            local[b] = (local[b] * (g.inverse() * q * g)).normalize();
-        }
-        local
+        let scaled: Vec<(&str, Vec3, f32)> =
+            turns.iter().map(|&(n, a, d)| (n, a, d * share)).collect();
+        turned_locals(&self.model, &self.rest, &scaled)
     }
 
     /// The skin and the 20 Kinect joints, sensor space, for the body standing at `spot`.
