@@ -68,6 +68,13 @@ pub struct TrackerSettings {
     /// times depth², m²) are not used.
     pub parts: ProposalSettings,
     pub parts_min_weight: f32,
+    /// A person found again within this many seconds of the last frame they were seen in,
+    /// and within `same_person_m` of where they were (their centroid), is the same person:
+    /// their size, build and pose are kept. (A dancer's walkover or a foot strike can lose
+    /// the person for a few frames; sizing them afresh bent double took a man for a body
+    /// 0.75 of his height.) Longer, or elsewhere: a new person.
+    pub keep_person_s: f64,
+    pub same_person_m: f32,
 }
 
 impl Default for TrackerSettings {
@@ -88,6 +95,8 @@ impl Default for TrackerSettings {
             turn_margin: 0.06,
             parts: ProposalSettings::default(),
             parts_min_weight: 2.0,
+            keep_person_s: 0.5,
+            same_person_m: 1.0,
         }
     }
 }
@@ -243,6 +252,8 @@ pub struct Tracker {
     parts: Option<Arc<Forest>>,
     part_scratch: PartScratch,
     proposals: Vec<Proposal>,
+    /// When the person was last seen (the frame's time, s) and where (their centroid).
+    last_seen: Option<(f64, Vec3)>,
 }
 
 impl Tracker {
@@ -275,6 +286,7 @@ impl Tracker {
             parts: None,
             part_scratch: PartScratch::default(),
             proposals: Vec::new(),
+            last_seen: None,
         }
     }
 
@@ -471,22 +483,45 @@ impl Tracker {
 
     /// Forgets the person: the next frame starts afresh.
     pub fn reset(&mut self) {
+        self.forget_person();
+        self.segmenter.reset();
+    }
+
+    /// The next person seen is someone new: started afresh, sized and measured anew.
+    fn forget_person(&mut self) {
         self.pose = None;
         self.previous = None;
+        self.last_seen = None;
         self.forget_size();
-        self.segmenter.reset();
         self.forget_shape();
+    }
+
+    /// Whether a person seen at `time_s` (at `centroid`, if seen) may be the one last seen
+    /// ([`TrackerSettings::keep_person_s`]).
+    fn same_person(&self, time_s: f64, centroid: Option<Vec3>) -> bool {
+        let Some((seen_s, seen_at)) = self.last_seen else {
+            return false;
+        };
+        let gap = time_s - seen_s;
+        (0.0..=self.settings.keep_person_s).contains(&gap)
+            && centroid.is_none_or(|c| c.distance(seen_at) <= self.settings.same_person_m)
     }
 
     /// The skeleton in `frame`, `None` when no one is there.
     pub fn track(&mut self, frame: &DepthFrame) -> Option<Tracked> {
         self.search_ms = None;
         let Some(person) = self.segmenter.segment(frame) else {
-            self.pose = None;
-            self.forget_size();
-            self.forget_shape();
+            // Gone for a moment (kept), or gone.
+            self.previous = None;
+            if !self.same_person(frame.time_s, None) {
+                self.forget_person();
+            }
             return None;
         };
+        if !self.same_person(frame.time_s, Some(person.centroid)) {
+            self.forget_person();
+        }
+        self.last_seen = Some((frame.time_s, person.centroid));
         self.sample_points(frame, &person);
         self.silhouette.update(&person.mask, person.bbox);
         let settings = self.settings;

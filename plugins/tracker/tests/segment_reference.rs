@@ -183,7 +183,7 @@ impl Stats {
             && (0.9..2.3).contains(&self.top_m)
             && (self.bottom_m < 0.5 || self.touches_bottom_row)
             && extent.x < 2.0
-            && extent.z < 1.2
+            && extent.z < 2.0
             && !(self.sides >= 8 && self.behind * 2 > self.sides)
             && !(self.top_m > 2.0
                 && self.top_row_pixels * 10 > (usize::from(self.bbox[2] - self.bbox[0]) + 1) * 9)
