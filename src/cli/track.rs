@@ -238,13 +238,19 @@ pub struct RecordingEval {
     pub p95_mm: f64,
     pub all_joints_pct: f64,
     pub starts: usize,
+    /// The person's height as the tracker sized them in the last frame tracked, cm (the
+    /// recording's own is in its `body.json`, `stature_cm`).
+    pub stature_cm: Option<f64>,
 }
 
 fn print_eval(r: &TrackEvalReport) {
     for d in &r.recordings {
+        let height = d
+            .stature_cm
+            .map_or(String::new(), |h| format!(", sized {h:.1} cm tall"));
         println!(
             "{}: {} frames, mean {:.0} mm (trunk {:.0}), p95 {:.0} mm, every joint tracked or \
-             inferred in {:.1} % of frames in view, {} starts",
+             inferred in {:.1} % of frames in view, {} starts{height}",
             d.dump, d.frames, d.mean_mm, d.trunk_mean_mm, d.p95_mm, d.all_joints_pct, d.starts
         );
     }
@@ -326,6 +332,7 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
         // by 57 mm on a T-shirt recording the fit loses a limb in).
         let mut tracker = tracker(&model, &build)?;
         let mut one = Evaluation::new();
+        let mut stature_cm = None;
         let count = recording.depth_count();
         let shown: Vec<usize> = PICTURE_AT
             .iter()
@@ -338,6 +345,9 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
             let joints: Vec<Vec3> = line.joints.iter().map(|j| Vec3::from_array(*j)).collect();
             // Time and score once; the overall figures take the same result.
             let out = one.step(&mut tracker, &frame, &joints);
+            if let Some(t) = &out {
+                stature_cm = Some(f64::from(tracker.body.height_m * t.pose.scale) * 100.0);
+            }
             let (ms, search_ms) = one.last_time_ms();
             overall.record(&frame, &joints, out.as_ref(), ms, search_ms);
             if png.is_some() && recordings.is_empty() && shown.contains(&i) {
@@ -355,6 +365,7 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
             p95_mm: r.p95_mm,
             all_joints_pct: r.all_joints_pct,
             starts: r.starts,
+            stature_cm,
         });
     }
     if let Some(png) = png {

@@ -50,6 +50,10 @@ pub struct Extremum {
     /// part's radius of the end, pushed into the body along the ray by half the part's
     /// thickness (the head's centre, the hand's middle, the ball of the foot).
     pub joint: Vec3,
+    /// The highest point of the surface within the part's radius of the end, sensor space
+    /// (the crown of the head as seen: the end may lie on the forehead; a hand raised
+    /// beside the head is not on the head's surface).
+    pub top: Vec3,
     /// Its pixel.
     pub pixel: [u16; 2],
     /// Surface distance from the body's centre, metres.
@@ -109,6 +113,7 @@ pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extrem
         found.push(Extremum {
             position,
             joint: position,
+            top: position,
             pixel: [((far % W) * STEP) as u16, ((far / W) * STEP) as u16],
             geodesic_m: centre[far],
             part: Part::Other,
@@ -123,7 +128,12 @@ pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extrem
         let (sum, count) = (0..W * H)
             .filter(|&n| distance[n] <= radius)
             .filter_map(|n| points[n])
-            .fold((Vec3::ZERO, 0usize), |(s, c), p| (s + p, c + 1));
+            .fold((Vec3::ZERO, 0usize), |(s, c), p| {
+                if person.floor.height(p) > person.floor.height(e.top) {
+                    e.top = p;
+                }
+                (s + p, c + 1)
+            });
         if count > 0 {
             let centre = sum / count as f32;
             e.joint = centre + centre.normalize_or_zero() * depth;
@@ -219,12 +229,14 @@ fn label(found: &mut [Extremum], centre: Vec3, floor: &Plane) {
         }
         _ => {}
     }
-    // The head: of the ends well above the centre, the one highest and nearest the body's
-    // axis (the head sits on the trunk; a raised hand is off to the side, a broad shoulder's
-    // bulge lower down).
+    // The head: of the ends well above the centre, the one highest, nearest the body's axis
+    // and nearest the centre along the surface (the head sits on the trunk; a raised hand is
+    // off to the side and an arm's length farther round, a broad shoulder's bulge lower
+    // down). Without the surface distance a hand raised beside the head of a small woman
+    // took the head's name, and her height was taken from it.
     let head_score = |e: &Extremum| {
         let off = Vec3::new(e.position.x - centre.x, 0.0, e.position.z - centre.z).length();
-        height(e) - 1.5 * off
+        height(e) - 1.5 * off - e.geodesic_m
     };
     let head = order
         .iter()

@@ -87,3 +87,55 @@ fn a_tall_person_who_comes_in_bowed_is_sized_to_their_stature() {
 fn a_short_person_who_comes_in_bowed_is_sized_to_their_stature() {
     assert_sized(0.9, 400);
 }
+
+/// Arms raised straight up, the hands above and close beside the head (CMU 13_10 reaches up
+/// so), the whole person in the image: the first frame sizes the person by the top of their
+/// head, not their hands. (Sized from the head end's column before, the shorter one came out
+/// 3.4 % tall, a forearm beside the head taken for its top.)
+#[test]
+fn a_person_first_seen_with_arms_raised_is_sized_by_the_head() {
+    let arms_up: Turns = &[
+        ("upperarm_l", Vec3::Z, 150.0),
+        ("upperarm_r", Vec3::Z, -150.0),
+        ("lowerarm_l", Vec3::X, -60.0),
+        ("lowerarm_r", Vec3::X, -60.0),
+    ];
+    for (factor, seed) in [(0.92f32, 500u64), (0.98, 600)] {
+        let person = scaled_body(factor);
+        let rest = vec![glam::Quat::IDENTITY; person.model.bones.len()];
+        let (skin, _) = person.posed(&rest, Vec3::ZERO);
+        let (lo, hi) = skin
+            .iter()
+            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+                (lo.min(p.y), hi.max(p.y))
+            });
+        let stature = hi - lo;
+        let (skin, _) = person.posed(&person.locals(arms_up, 1.0), Vec3::new(0.05, -0.8, 3.0));
+        let reach = skin
+            .iter()
+            .map(|p| p.y + 0.8)
+            .fold(f32::NEG_INFINITY, f32::max);
+        assert!(
+            reach > stature + 0.1,
+            "the scene shows the case: hands above the head"
+        );
+        let frame = render(
+            &scene(vec![(skin, Label::Body)], &person.model.triangles),
+            seed,
+            0.0,
+        );
+        let model = common::model();
+        let body = TrackBody::new(&model, &model.positions).expect("a trackable body");
+        let mut tracker = Tracker::new(body, TrackerSettings::default());
+        let tracked = tracker.track(&frame).expect("the person tracked");
+        let sized = tracked.pose.scale * tracker.body.height_m;
+        let percent = (sized / stature - 1.0) * 100.0;
+        println!(
+            "stature {:.1} cm, reach {:.1} cm: sized {:.1} cm ({percent:+.2} %)",
+            stature * 100.0,
+            reach * 100.0,
+            sized * 100.0
+        );
+        assert!(percent.abs() < 1.5, "sized {percent:+.2} % off");
+    }
+}

@@ -31,31 +31,31 @@ impl Tracker {
         self.starts += 1;
         let floor = person.floor;
         let ends = geodesic_extrema(frame, person);
-        // The head's end, if it is one: near the top of the person and above their middle (a
-        // broad shoulder can pass for it).
-        let head = ends
-            .iter()
-            .find(|e| e.part == Part::Head)
-            .map(|e| e.position)
-            .filter(|h| {
-                floor.height(*h) > person.top_m - 0.3 && (h.x - person.centroid.x).abs() < 0.25
-            });
-        // The person's height: the top of what is seen, unless that is a raised hand; then
-        // the highest point near the head's end.
-        let whole = usize::from(person.bbox[3]) + 1 < HEIGHT && usize::from(person.bbox[1]) > 0;
+        // A hand is the top of what is seen: raised.
         let hand_on_top = ends.iter().any(|e| {
             matches!(e.part, Part::HandLeft | Part::HandRight)
                 && floor.height(e.position) > person.top_m - 0.1
         });
-        let top = match (hand_on_top, head) {
+        // The head's end, if it is one: above the person's middle (within 25 cm across) and
+        // within `below` of their top (a broad shoulder can pass for it).
+        let head_end = |below: f32| {
+            ends.iter().find(|e| {
+                e.part == Part::Head
+                    && floor.height(e.position) > person.top_m - below
+                    && (e.position.x - person.centroid.x).abs() < 0.25
+            })
+        };
+        // The start pulls to it only near the top, as before sizing looked farther down.
+        let head = head_end(0.3).map(|e| e.position);
+        // The person's height: the top of what is seen, unless that is a raised hand; then
+        // the top of the head's surface around its end, which may lie an arm's reach under
+        // the hands (not the top of a column above the head's end, which takes in a hand
+        // raised close beside it: a small woman on CMU 13_10 was sized from her hand so, 11 %
+        // too tall).
+        let whole = usize::from(person.bbox[3]) + 1 < HEIGHT && usize::from(person.bbox[1]) > 0;
+        let top = match (hand_on_top, head_end(0.7)) {
             (false, _) => Some(person.top_m),
-            (true, Some(h)) => Some(
-                self.points
-                    .iter()
-                    .filter(|p| (p.x - h.x).abs() < 0.1 && (p.z - h.z).abs() < 0.25)
-                    .map(|&p| floor.height(p))
-                    .fold(floor.height(h), f32::max),
-            ),
+            (true, Some(e)) => Some(floor.height(e.top)),
             (true, None) => None,
         };
         // Beneath the centroid of what is seen, half a body's depth behind it.
