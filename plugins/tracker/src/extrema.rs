@@ -125,15 +125,20 @@ pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extrem
         let node = (usize::from(e.pixel[1]) / STEP) * W + usize::from(e.pixel[0]) / STEP;
         let (radius, depth) = part_size(e.part);
         dijkstra(&points, &[node], &mut distance, radius);
-        let (sum, count) = (0..W * H)
+        let higher = |a: Vec3, b: Vec3| {
+            if person.floor.height(b) > person.floor.height(a) {
+                b
+            } else {
+                a
+            }
+        };
+        let (sum, count, top) = (0..W * H)
             .filter(|&n| distance[n] <= radius)
             .filter_map(|n| points[n])
-            .fold((Vec3::ZERO, 0usize), |(s, c), p| {
-                if person.floor.height(p) > person.floor.height(e.top) {
-                    e.top = p;
-                }
-                (s + p, c + 1)
+            .fold((Vec3::ZERO, 0usize, e.position), |(s, c, t), p| {
+                (s + p, c + 1, higher(t, p))
             });
+        e.top = top;
         if count > 0 {
             let centre = sum / count as f32;
             e.joint = centre + centre.normalize_or_zero() * depth;

@@ -8,11 +8,27 @@ use std::path::Path;
 mod common;
 
 use fitroom_body::BodyModel;
-use fitroom_depth::DepthCamera;
 use fitroom_depth::synthetic::{Label, NoiseSettings, Scene, SceneMesh, SyntheticCamera};
+use fitroom_depth::{DepthCamera, DepthFrame};
 use fitroom_sensor::KinectJoint;
-use fitroom_tracker::{Part, SegmentSettings, Segmenter, geodesic_extrema};
+use fitroom_tracker::{Extremum, Part, SegmentSettings, Segmenter, geodesic_extrema};
 use glam::Vec3;
+
+/// The extrema of the person segmented in `frame`.
+fn ends_of(frame: &DepthFrame) -> Vec<Extremum> {
+    let person = Segmenter::new(SegmentSettings::default())
+        .segment(frame)
+        .expect("a person");
+    geodesic_extrema(frame, &person)
+}
+
+/// The end named `part` (the scene `z` m away, for the message).
+fn named(ends: &[Extremum], part: Part, z: f32) -> Extremum {
+    *ends
+        .iter()
+        .find(|e| e.part == part)
+        .unwrap_or_else(|| panic!("{z} m: no {part:?} among {ends:?}"))
+}
 
 #[test]
 fn head_hands_and_feet_are_the_ends_of_the_surface() {
@@ -41,16 +57,8 @@ fn head_hands_and_feet_are_the_ends_of_the_surface() {
         let frame = SyntheticCamera::new(DepthCamera::default(), NoiseSettings::default(), seed)
             .render(&scene, 0.0)
             .frame;
-        let person = Segmenter::new(SegmentSettings::default())
-            .segment(&frame)
-            .expect("a person");
-        let ends = geodesic_extrema(&frame, &person);
-        let find = |part: Part| {
-            ends.iter()
-                .find(|e| e.part == part)
-                .unwrap_or_else(|| panic!("{z} m: no {part:?} among {ends:?}"))
-                .position
-        };
+        let ends = ends_of(&frame);
+        let find = |part: Part| named(&ends, part, z).position;
         // The end of each part against the rig. The head's end lies on the visible cap of
         // the head (its top is too oblique to the sensor to be read): within 15 cm of the
         // head's centre, 9 cm above the head bone (which starts at the skull's base). A
@@ -123,16 +131,8 @@ fn arms_raised_beside_the_head_leave_the_head_its_name() {
             seed,
             0.0,
         );
-        let person = Segmenter::new(SegmentSettings::default())
-            .segment(&frame)
-            .expect("a person");
-        let ends = geodesic_extrema(&frame, &person);
-        let find = |part: Part| {
-            ends.iter()
-                .find(|e| e.part == part)
-                .unwrap_or_else(|| panic!("{z} m: no {part:?} among {ends:?}"))
-                .joint
-        };
+        let ends = ends_of(&frame);
+        let find = |part: Part| named(&ends, part, z).joint;
         let head = find(Part::Head).distance(at(KinectJoint::Head));
         println!(
             "{z} m: head joint {:.0} mm from the head's centre",

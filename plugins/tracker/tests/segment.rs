@@ -55,6 +55,18 @@ fn room() -> Scene {
     Scene::room(-SENSOR_HEIGHT, 3.9)
 }
 
+/// The room with a body of `skin` (sensor space) in it.
+fn room_with(skin: Vec<Vec3>, triangles: &[[u32; 3]]) -> Scene {
+    let mut scene = room();
+    scene.meshes.push(SceneMesh {
+        positions: skin,
+        triangles: triangles.to_vec(),
+        label: Label::Body,
+        closed: true,
+    });
+    scene
+}
+
 /// Precision and recall of `mask` against the pixels that see the body and have a reading.
 fn score(frame: &SyntheticFrame, mask: &[bool]) -> (f32, f32) {
     let truth: Vec<bool> = (0..PIXELS)
@@ -216,13 +228,7 @@ fn the_far_arm_seen_past_the_back_is_the_persons() {
         let (skin, _) = body.posed(&body.locals(arms, 1.0), spot);
         let turn = Quat::from_rotation_y(yaw.to_radians());
         let skin = skin.into_iter().map(|p| spot + turn * (p - spot)).collect();
-        let mut scene = room();
-        scene.meshes.push(SceneMesh {
-            positions: skin,
-            triangles: body.model.triangles.clone(),
-            label: Label::Body,
-            closed: true,
-        });
+        let scene = room_with(skin, &body.model.triangles);
         let frame = camera(seed).render(&scene, 0.0);
         let segment = |join_parts| {
             let settings = SegmentSettings {
@@ -292,13 +298,10 @@ fn a_foot_stretched_back_to_the_wall_does_not_join_the_person_to_it() {
         .max_by(|a, b| deepest(a).total_cmp(&deepest(b)))
         .expect("two poses");
     let shift = Vec3::new(0.0, 0.0, wall_z - 0.04 - deepest(&skin));
-    let mut scene = room();
-    scene.meshes.push(SceneMesh {
-        positions: skin.iter().map(|&p| p + shift).collect(),
-        triangles: body.model.triangles.clone(),
-        label: Label::Body,
-        closed: true,
-    });
+    let scene = room_with(
+        skin.iter().map(|&p| p + shift).collect(),
+        &body.model.triangles,
+    );
     let frame = camera(21).render(&scene, 0.0);
     let segment = |wall| {
         let settings = SegmentSettings {
@@ -353,13 +356,7 @@ fn a_person_stretched_along_the_view_is_a_person() {
         "the scene shows the case: {:.2} m",
         far - near
     );
-    let mut scene = room();
-    scene.meshes.push(SceneMesh {
-        positions: skin,
-        triangles: body.model.triangles.clone(),
-        label: Label::Body,
-        closed: true,
-    });
+    let scene = room_with(skin, &body.model.triangles);
     let frame = camera(21).render(&scene, 0.0);
     let found = Segmenter::default()
         .segment(&frame.frame)

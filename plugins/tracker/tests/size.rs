@@ -26,13 +26,7 @@ const BOWED: Turns = &[
 /// out.
 fn stature_and_tracked(factor: f32, bowed: bool, seed: u64) -> (f32, f32) {
     let person = scaled_body(factor);
-    let rest = vec![glam::Quat::IDENTITY; person.model.bones.len()];
-    let (skin, _) = person.posed(&rest, Vec3::ZERO);
-    let (lo, hi) = skin
-        .iter()
-        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
-            (lo.min(p.y), hi.max(p.y))
-        });
+    let stature = stature(&person);
     let model = common::model();
     let body = TrackBody::new(&model, &model.positions).expect("a trackable body");
     let mut tracker = Tracker::new(body, TrackerSettings::default());
@@ -57,7 +51,19 @@ fn stature_and_tracked(factor: f32, bowed: bool, seed: u64) -> (f32, f32) {
         let tracked = tracker.track(&frame).expect("the person tracked");
         size = Some(tracked.pose.scale * tracker.body.height_m);
     }
-    (hi - lo, size.expect("tracked"))
+    (stature, size.expect("tracked"))
+}
+
+/// The body's stature: soles to crown at rest, metres.
+fn stature(person: &common::Body) -> f32 {
+    let rest = vec![glam::Quat::IDENTITY; person.model.bones.len()];
+    let (skin, _) = person.posed(&rest, Vec3::ZERO);
+    let (lo, hi) = skin
+        .iter()
+        .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
+            (lo.min(p.y), hi.max(p.y))
+        });
+    hi - lo
 }
 
 /// Sized within 1 % of the stature whether first seen bowed or standing straight.
@@ -102,14 +108,7 @@ fn a_person_first_seen_with_arms_raised_is_sized_by_the_head() {
     ];
     for (factor, seed) in [(0.92f32, 500u64), (0.98, 600)] {
         let person = scaled_body(factor);
-        let rest = vec![glam::Quat::IDENTITY; person.model.bones.len()];
-        let (skin, _) = person.posed(&rest, Vec3::ZERO);
-        let (lo, hi) = skin
-            .iter()
-            .fold((f32::INFINITY, f32::NEG_INFINITY), |(lo, hi), p| {
-                (lo.min(p.y), hi.max(p.y))
-            });
-        let stature = hi - lo;
+        let stature = stature(&person);
         let (skin, _) = person.posed(&person.locals(arms_up, 1.0), Vec3::new(0.05, -0.8, 3.0));
         let reach = skin
             .iter()
