@@ -201,6 +201,7 @@ enum Estimation {
     Done,
 }
 
+mod front;
 mod recover;
 mod start;
 

@@ -162,3 +162,35 @@ fn a_hand_before_the_belly_is_kept_by_a_one_sided_trunk_term() {
     assert!(one_sided < 0.05, "one-sided: {one_sided:.3} m");
     assert!(two_sided > 0.1, "two-sided: {two_sided:.3} m");
 }
+
+/// The arms hanging; then, between two frames, the left forearm raised across the chest, the
+/// hand before the other shoulder (a walk's swing brings a forearm there in a few frames).
+/// Followed, the fit leaves the arm hanging where the person's edge still lies under it and
+/// the forearm's points, close to the chest, go to the trunk: neither few points on the arm
+/// nor a folded arm nor points far from the body suspect it (without the forearm standing
+/// out of the body as a cue, recovery leaves it 375 mm off). What shows it is the depth: the
+/// forearm stands out of the chest around it.
+const HANGING: Turns = &[
+    ("upperarm_l", Vec3::Z, -35.0),
+    ("upperarm_r", Vec3::Z, 35.0),
+];
+const ACROSS_THE_CHEST: Turns = &[
+    ("upperarm_l", Vec3::Z, -35.0),
+    ("upperarm_r", Vec3::Z, 35.0),
+    ("upperarm_l", Vec3::X, -15.0),
+    ("lowerarm_l", Vec3::X, -75.0),
+    ("upperarm_l", Vec3::Y, -60.0),
+];
+
+#[test]
+fn a_forearm_raised_across_the_chest_is_found_again() {
+    use KinectJoint::*;
+    let arm = [ElbowLeft, WristLeft, HandLeft];
+    found_again(
+        "forearm across the chest",
+        (HANGING, ACROSS_THE_CHEST),
+        &arm,
+        0.1,
+        0.05,
+    );
+}

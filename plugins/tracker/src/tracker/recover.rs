@@ -7,13 +7,15 @@
 //! hypothesis is fitted: the limb (both legs, for crossed legs) back at rest and pulled to
 //! the geodesic extrema of its hand or foot, as a start is, and for an arm also with the
 //! forearm bent forward, and, with a body-part forest ([`crate::bodyparts`]), pulled to the
-//! forest's joint proposals. A hypothesis is kept when it explains the frame better.
+//! forest's joint proposals; an arm held before the body ([`super::front`]) is tried with
+//! its hand pulled to what stands out there. A hypothesis is kept when it explains the frame
+//! better.
 
 use std::f32::consts::FRAC_PI_2;
 
 use fitroom_depth::DepthFrame;
 use fitroom_sensor::KinectJoint;
-use glam::Quat;
+use glam::{Quat, Vec3};
 
 use super::{Tracker, score};
 use crate::extrema::{Part, geodesic_extrema};
@@ -35,7 +37,7 @@ impl Limb {
 
     /// The Kinect joints whose bones' drivers move the limb: upper arm or thigh, forearm or
     /// shin, hand or foot.
-    fn joints(self) -> [KinectJoint; 3] {
+    pub(super) fn joints(self) -> [KinectJoint; 3] {
         use KinectJoint::*;
         match self {
             Self::ArmLeft => [ElbowLeft, WristLeft, HandLeft],
@@ -56,7 +58,7 @@ impl Limb {
     }
 
     /// An arm's shoulder (`None` for a leg).
-    fn shoulder(self) -> Option<KinectJoint> {
+    pub(super) fn shoulder(self) -> Option<KinectJoint> {
         match self {
             Self::ArmLeft => Some(KinectJoint::ShoulderLeft),
             Self::ArmRight => Some(KinectJoint::ShoulderRight),
@@ -75,7 +77,7 @@ impl Limb {
 }
 
 /// How a suspected limb is tried again.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 enum Hypothesis {
     /// At rest, pulled to the geodesic extremum of its end.
     Extremum,
@@ -83,6 +85,8 @@ enum Hypothesis {
     Bent,
     /// At rest, pulled to the body-part forest's proposals for its joints.
     Proposed,
+    /// An arm with its forearm bent forward and its hand pulled to a point before the body.
+    Held(Vec3),
 }
 
 /// A limb with fewer data points on its upper and lower bones than this is suspected lost.
@@ -150,7 +154,9 @@ impl Tracker {
         fit: FitStats,
     ) -> (Pose, FitStats) {
         let suspects = self.suspects(&pose, &fit);
-        if suspects.is_empty() {
+        // (`suspects` posed the body as `pose`.)
+        let held = self.before_the_body(frame, person);
+        if suspects.is_empty() && held.is_empty() {
             return (pose, fit);
         }
         let ends = geodesic_extrema(frame, person);
@@ -176,8 +182,22 @@ impl Tracker {
             }
             tries.push((limbs, Hypothesis::Extremum));
         }
+        // Then an arm held before the body, pulled there; the two arms are alternatives to
+        // each other (a hand before the belly may be either's): each is tried from the same
+        // pose, the better kept.
+        tries.extend(
+            held.iter()
+                .map(|&(arm, hand)| (vec![arm], Hypothesis::Held(hand))),
+        );
+        let mut held_base: Option<(Pose, f32)> = None;
         for (limbs, how) in tries {
-            let mut candidate = best.clone();
+            if matches!(how, Hypothesis::Held(_)) && held_base.is_none() {
+                held_base = Some((best.clone(), score(&best_fit)));
+            }
+            let mut candidate = match &held_base {
+                Some((base, _)) => base.clone(),
+                None => best.clone(),
+            };
             let mut targets = Vec::new();
             for &limb in &limbs {
                 for j in limb.joints() {
@@ -189,7 +209,10 @@ impl Tracker {
                             targets.push((j.index(), p.position, 1.0));
                         }
                     }
-                } else if how == Hypothesis::Bent {
+                } else if matches!(how, Hypothesis::Bent | Hypothesis::Held(_)) {
+                    if let Hypothesis::Held(hand) = how {
+                        targets.push((limb.end_joint().index(), hand, 1.0));
+                    }
                     let forearm = self.body.drivers[limb.joints()[1].index()];
                     if let Some(JointKind::Hinge { axis, .. }) = self
                         .body
@@ -219,7 +242,12 @@ impl Tracker {
                 ..obs
             };
             let candidate_fit = fitter.fit(&self.body, &mut candidate, &obs, &self.settings.fit, n);
-            if candidate.is_finite() && score(&candidate_fit) > score(&best_fit) + BETTER_BY {
+            let s = score(&candidate_fit);
+            let better = match held_base {
+                Some((_, base)) => s > base + BETTER_BY && s > score(&best_fit),
+                None => s > score(&best_fit) + BETTER_BY,
+            };
+            if candidate.is_finite() && better {
                 // The kept fit's support is the hypothesis's: swap the fitters.
                 std::mem::swap(&mut self.fitter, &mut fitter);
                 (best, best_fit) = (candidate, candidate_fit);
