@@ -172,7 +172,7 @@ const CANDIDATES: usize = 4;
 
 /// The closest point's distance and outward normal of a tapered capsule (the sphere swept
 /// along the axis, its radius interpolated at the point's projection on the axis).
-fn capsule_distance(p: Vec3, a: Vec3, b: Vec3, ra: f32, rb: f32) -> (f32, Vec3) {
+pub(crate) fn capsule_distance(p: Vec3, a: Vec3, b: Vec3, ra: f32, rb: f32) -> (f32, Vec3) {
     let ab = b - a;
     let l2 = ab.length_squared();
     let t = if l2 > 1e-12 {

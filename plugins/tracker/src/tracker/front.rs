@@ -12,7 +12,13 @@ use glam::Vec3;
 
 use super::Tracker;
 use super::recover::Limb;
+use crate::fit::capsule_distance;
 use crate::segment::Segmentation;
+
+/// How far `p` lies outside a posed capsule `(a, b, radius at a, radius at b)`, metres.
+fn outside_capsule(p: Vec3, (a, b, ra, rb): (Vec3, Vec3, f32, f32)) -> f32 {
+    capsule_distance(p, a, b, ra, rb).0
+}
 
 /// How far to each side of a point the surface behind it is looked for, metres (a forearm is
 /// 6-8 cm across, a hand 9).
@@ -78,19 +84,11 @@ fn standing_out(frame: &DepthFrame, mask: &[bool], points: &[Vec3], out: &mut Ve
     }
 }
 
-/// How far `p` lies outside a tapered capsule `(a, b, radius at a, radius at b)`, metres
-/// (negative inside).
-fn outside_capsule(p: Vec3, (a, b, ra, rb): (Vec3, Vec3, f32, f32)) -> f32 {
-    let ab = b - a;
-    let t = ((p - a).dot(ab) / ab.length_squared().max(1e-12)).clamp(0.0, 1.0);
-    p.distance(a + ab * t) - (ra + (rb - ra) * t)
-}
-
 impl Tracker {
     /// The arms that may be held before the body, each with where its hand would be: with
-    /// points standing out of the body's surface that no arm is near
-    /// ([`standing_out`]), each arm not near them (in `self.posed`), its hand at the point
-    /// of them farthest from its shoulder.
+    /// points standing out of the body's surface ([`standing_out`]) that no part of the body
+    /// (posed in `self.posed`) is near, the arm on their side not near them either, its hand
+    /// at the point of them farthest from its shoulder.
     pub(super) fn before_the_body(
         &self,
         frame: &DepthFrame,
