@@ -216,6 +216,8 @@ pub struct Tracker {
     fitter: Fitter,
     posed: Posed,
     points: Vec<Vec3>,
+    /// Scratch: the points standing out of the body this frame (`front`).
+    standing_out: Vec<Vec3>,
     pose: Option<Pose>,
     /// The root's rotation in the frame before `pose`'s, when both were followed (the body's
     /// turn, [`carry_turn`]).
@@ -269,6 +271,7 @@ impl Tracker {
             fitter: Fitter::default(),
             posed: Posed::default(),
             points: Vec::new(),
+            standing_out: Vec::new(),
             pose: None,
             previous: None,
             scale: None,

@@ -90,19 +90,38 @@ impl Tracker {
     /// (posed in `self.posed`) is near, the arm on their side not near them either, its hand
     /// at the point of them farthest from its shoulder.
     pub(super) fn before_the_body(
-        &self,
+        &mut self,
         frame: &DepthFrame,
         person: &Segmentation,
     ) -> Vec<(Limb, Vec3)> {
-        let mut out = Vec::new();
+        let mut out = std::mem::take(&mut self.standing_out);
         standing_out(frame, &person.mask, &self.points, &mut out);
+        let held = self.held_at(&mut out);
+        self.standing_out = out;
+        held
+    }
+
+    /// [`Self::before_the_body`] from the points standing out (`out`, filtered in place).
+    fn held_at(&self, out: &mut Vec<Vec3>) -> Vec<(Limb, Vec3)> {
         let joints = self.body.kinect_joints(&self.posed);
         // Above the hips along the trunk: a loose shirt's hem before the crotch stands out
         // of the legs around it too.
         let hips = joints[KinectJoint::HipCenter.index()];
         let trunk = joints[KinectJoint::ShoulderCenter.index()] - hips;
         out.retain(|&p| (p - hips).dot(trunk) > ABOVE_HIPS * trunk.length_squared());
-        let arms = [Limb::ArmLeft, Limb::ArmRight];
+        // Left unexplained: no capsule of the body near them (a thigh's front, a breast
+        // stand out of the surface around them as well, and are where the body is).
+        out.retain(|&p| {
+            self.posed
+                .capsules
+                .iter()
+                .all(|&c| outside_capsule(p, c) > NEAR_M)
+        });
+        if out.len() < MIN_STANDING_OUT {
+            return Vec::new();
+        }
+        let centre = out.iter().copied().sum::<Vec3>() / out.len() as f32;
+        // How near an arm's capsules come to `p`.
         let near = |limb: Limb, p: Vec3| {
             let upper = self.body.drivers[limb.joints()[0].index()];
             self.body
@@ -117,29 +136,13 @@ impl Tracker {
                 .map(|(_, &c)| outside_capsule(p, c))
                 .fold(f32::INFINITY, f32::min)
         };
-        // Left unexplained: no capsule of the body near them (a thigh's front, a breast
-        // stand out of the surface around them as well, and are where the body is).
-        out.retain(|&p| {
-            self.posed
-                .capsules
-                .iter()
-                .all(|&c| outside_capsule(p, c) > NEAR_M)
-        });
-        if out.len() < MIN_STANDING_OUT {
-            return Vec::new();
-        }
-        let centre = out.iter().copied().sum::<Vec3>() / out.len() as f32;
-        let around: Vec<Vec3> = out
-            .iter()
-            .copied()
-            .filter(|p| p.distance(centre) < CLUSTER_M)
-            .collect();
         // Whose they are: the arm on their side of the body, either near its middle.
         let across = (joints[KinectJoint::ShoulderLeft.index()]
             - joints[KinectJoint::ShoulderRight.index()])
         .normalize_or_zero();
         let lateral = (centre - hips).dot(across);
-        arms.into_iter()
+        [Limb::ArmLeft, Limb::ArmRight]
+            .into_iter()
             .filter(|&arm| match arm {
                 Limb::ArmLeft => lateral > -MIDDLE_M,
                 _ => lateral < MIDDLE_M,
@@ -147,9 +150,10 @@ impl Tracker {
             .filter(|&arm| near(arm, centre) > HELD_M)
             .filter_map(|arm| {
                 let shoulder = joints[arm.shoulder()?.index()];
-                let hand = around
+                let hand = out
                     .iter()
                     .copied()
+                    .filter(|p| p.distance(centre) < CLUSTER_M)
                     .max_by(|a, b| a.distance(shoulder).total_cmp(&b.distance(shoulder)))?;
                 Some((arm, hand))
             })
