@@ -241,6 +241,9 @@ pub struct RecordingEval {
     /// The person's height as the tracker sized them in the last frame tracked, cm (the
     /// recording's own is in its `body.json`, `stature_cm`).
     pub stature_cm: Option<f64>,
+    /// The clothing layer the person was found to wear (the build's search tries one on the
+    /// trunk and upper arms), cm; `None`: no build found.
+    pub clothing_cm: Option<f64>,
 }
 
 fn print_eval(r: &TrackEvalReport) {
@@ -248,9 +251,12 @@ fn print_eval(r: &TrackEvalReport) {
         let height = d
             .stature_cm
             .map_or(String::new(), |h| format!(", sized {h:.1} cm tall"));
+        let clothing = d
+            .clothing_cm
+            .map_or(String::new(), |c| format!(", clothing {c:.1} cm"));
         println!(
             "{}: {} frames, mean {:.0} mm (trunk {:.0}), p95 {:.0} mm, every joint tracked or \
-             inferred in {:.1} % of frames in view, {} starts{height}",
+             inferred in {:.1} % of frames in view, {} starts{height}{clothing}",
             d.dump, d.frames, d.mean_mm, d.trunk_mean_mm, d.p95_mm, d.all_joints_pct, d.starts
         );
     }
@@ -366,6 +372,10 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
             all_joints_pct: r.all_joints_pct,
             starts: r.starts,
             stature_cm,
+            clothing_cm: tracker
+                .shape
+                .as_ref()
+                .map(|e| f64::from(e.clothing_m) * 100.0),
         });
     }
     if let Some(png) = png {

@@ -36,7 +36,12 @@ impl TrackedBuild {
 }
 
 impl BuildFit for TrackedBuild {
-    fn fit(&self, model: &BodyModel, snapshots: &[Snapshot]) -> Result<Shape, String> {
+    fn fit(
+        &self,
+        model: &BodyModel,
+        snapshots: &[Snapshot],
+        clothing_m: f32,
+    ) -> Result<Shape, String> {
         let mut views = Vec::with_capacity(snapshots.len());
         for s in snapshots {
             let view = AveragedView::single(&calibration_frame(&s.frame, &s.tracked))
@@ -68,7 +73,11 @@ impl BuildFit for TrackedBuild {
                 placement: *placement,
             })
             .collect();
-        both_genders(model, &poses, &self.prior, &self.settings)
+        let settings = FitSettings {
+            clothing_m,
+            ..self.settings.clone()
+        };
+        both_genders(model, &poses, &self.prior, &settings)
             .map(|m| m.estimate.shape)
             .map_err(|e| e.to_string())
     }

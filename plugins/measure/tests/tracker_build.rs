@@ -11,9 +11,10 @@ use fitroom_body::{BodyModel, Shape};
 use fitroom_depth::synthetic::NoiseSettings;
 use fitroom_measure::ShapePrior;
 use fitroom_measure::build::TrackedBuild;
-use fitroom_measure::eval::{Stance, record};
+use fitroom_measure::eval::{Filmed, Stance, record};
 use fitroom_tracker::eval::TRUNK;
-use fitroom_tracker::{Tracker, TrackerSettings};
+use fitroom_tracker::shape::{BuildFit, Snapshot};
+use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
 
 fn model() -> Arc<BodyModel> {
     let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
@@ -125,4 +126,103 @@ fn the_body_fit_gives_the_tracker_the_persons_stature_and_a_nearer_trunk() {
         fit < 0.9 * own,
         "the body fit's trunk {fit:.1} mm, the tracker's search {own:.1}"
     );
+}
+
+/// `shape` filmed standing (noise and stance from `seed`) with the skin of its trunk,
+/// clavicles and upper arms `layer_m` out along the skin's normals (a shirt's surface), and
+/// the frames the tracker kept for its build there.
+fn clothed_snapshots(
+    model: &Arc<BodyModel>,
+    shape: &Shape,
+    layer_m: f32,
+    seed: u64,
+) -> Vec<Snapshot> {
+    let mut rest = model.shaped(shape).expect("a body").positions;
+    let bones: Vec<usize> = [
+        "pelvis",
+        "spine_01",
+        "spine_02",
+        "spine_03",
+        "clavicle_l",
+        "clavicle_r",
+        "upperarm_l",
+        "upperarm_r",
+    ]
+    .iter()
+    .filter_map(|n| model.bone_index(n))
+    .collect();
+    let normals = fitroom_body::compute_normals(&rest, &model.triangles);
+    for ((v, n), j) in rest.iter_mut().zip(&normals).zip(&model.skin_joints) {
+        if bones.contains(&usize::from(j[0])) {
+            *v += *n * layer_m;
+        }
+    }
+    let filmed = Filmed {
+        shape,
+        detailed: Some(&rest),
+    };
+    let rec = record(
+        model,
+        filmed,
+        &Stance::drawn(seed),
+        12,
+        NoiseSettings::default(),
+        seed,
+        None,
+    )
+    .expect("a recording");
+    let mut tracker = Tracker::new(
+        TrackBody::new(model, &model.positions).expect("a body"),
+        TrackerSettings::default(),
+    );
+    let mut kept = Vec::new();
+    for (k, frame) in rec.frames.iter().enumerate() {
+        let tracked = tracker.track(&frame.depth).expect("the person tracked");
+        if k >= 9 {
+            kept.push(Snapshot {
+                frame: frame.depth.clone(),
+                tracked,
+            });
+        }
+    }
+    kept
+}
+
+/// The body fit under a layer of clothing (`FitSettings::clothing_m`) finds the body under
+/// it: on a person whose shirt stands 3 cm off the trunk and upper arms, the chest, waist and
+/// hips of the body fitted under a 3 cm layer are nearer the person's than those of the body
+/// fitted to the shirt's surface.
+#[test]
+fn the_body_fit_under_a_layer_of_clothing_finds_the_body_under_it() {
+    let model = model();
+    let prior = Arc::new(ShapePrior::shipped().expect("the shipped prior"));
+    let fit = TrackedBuild::new(prior);
+    let shape = Shape {
+        gender: 0.8,
+        weight: 0.6,
+        ..Shape::default()
+    };
+    let girths = |s: &Shape| {
+        let body = model.shaped(s).expect("a body");
+        let m = model.measure(&body.positions).expect("measured");
+        [m.bust_cm, m.waist_cm, m.hip_cm]
+    };
+    let truth = girths(&shape);
+    for seed in [51, 71] {
+        let kept = clothed_snapshots(&model, &shape, 0.03, seed);
+        let off = |t: f32| -> f32 {
+            let found = fit.fit(&model, &kept, t).expect("a build");
+            let g = girths(&found);
+            println!("seed {seed}, layer {t}: bust, waist, hip {g:?} cm; true {truth:?}");
+            g.iter()
+                .zip(&truth)
+                .map(|(a, b)| (a - b).abs())
+                .sum::<f32>()
+        };
+        let (under, over) = (off(0.03), off(0.0));
+        assert!(
+            under < 0.5 * over,
+            "seed {seed}: girths {under:.1} cm off under the layer, {over:.1} without"
+        );
+    }
 }

@@ -11,7 +11,9 @@
 //!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
-//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ASYM` (the trunk's outside weight): override the settings;
+//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ASYM` (the trunk's outside weight), `CLOTHING` (the
+//!   clothing layer tried, metres; 0: none): override the settings; `INFLATE=T`: the given
+//!   `SHAPE` in a clothing layer T metres thick;
 //! * `PARTS=F.forest`: a body-part forest's joint proposals as one more hypothesis for a
 //!   limb suspected lost (grow one with the `parts` example).
 //!
@@ -75,6 +77,9 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("ASYM") {
         s.fit.outside_weight = v;
     }
+    if let Some(v) = env("CLOTHING") {
+        s.clothing_m = v;
+    }
     if let Some(v) = env("PMINW") {
         s.parts_min_weight = v;
     }
@@ -98,7 +103,12 @@ fn main() -> Result<(), Error> {
     // A given shape is kept; else the person's build is estimated while tracking, unless
     // FIXED is set (the default body throughout).
     let mut tracker = if std::env::var("SHAPE").is_ok() || std::env::var("FIXED").is_ok() {
-        Tracker::new(TrackBody::new(&model, &positions)?, settings())
+        let mut body = TrackBody::new(&model, &positions)?;
+        // A given body in the clothing layer (`TrackBody::clothe`), e.g. the true shape.
+        if let Some(t) = env("INFLATE") {
+            body.clothe(t);
+        }
+        Tracker::new(body, settings())
     } else {
         Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?
     };
@@ -168,7 +178,7 @@ fn main() -> Result<(), Error> {
     }
     if let Some(e) = &tracker.shape {
         eprintln!(
-            "build: gender {:.2} weight {:.2} muscle {:.2} height {:.2} proportions {:.2} (cost {:.2} mm, default {:.2} mm, {} bodies tried)",
+            "build: gender {:.2} weight {:.2} muscle {:.2} height {:.2} proportions {:.2} (cost {:.2} mm, default {:.2} mm, {} bodies tried), clothing {:.1} cm",
             e.shape.gender,
             e.shape.weight,
             e.shape.muscle,
@@ -176,7 +186,8 @@ fn main() -> Result<(), Error> {
             e.shape.proportions,
             e.cost_m.unwrap_or(f32::NAN) * 1000.0,
             e.default_cost_m.unwrap_or(f32::NAN) * 1000.0,
-            e.evaluations
+            e.evaluations,
+            e.clothing_m * 100.0
         );
     }
     if std::env::var("SIGNED").is_ok() {

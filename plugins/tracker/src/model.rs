@@ -149,6 +149,41 @@ impl Posed {
 }
 
 impl TrackBody {
+    /// This body with a layer of clothing `t` metres thick on the trunk, the clavicles and
+    /// the upper arms (where a shirt is): their skin moved out along its normals, their
+    /// capsules' radii grown.
+    pub fn clothe(&mut self, t: f32) {
+        if t <= 0.0 {
+            return;
+        }
+        let mut bones = Vec::new();
+        let mut b = self.parents[self.kinect[KinectJoint::ShoulderCenter.index()].0];
+        while let Some(x) = b {
+            bones.push(x);
+            b = self.parents[x];
+        }
+        for side in [KinectJoint::ShoulderLeft, KinectJoint::ShoulderRight] {
+            let arm = self.kinect[side.index()].0;
+            bones.push(arm);
+            bones.extend(self.parents[arm]);
+        }
+        for b in bones {
+            if let Some(s) = self.surfaces.get(b) {
+                let points = s
+                    .points
+                    .iter()
+                    .zip(&s.normals)
+                    .map(|(p, n)| *p + *n * t)
+                    .collect();
+                self.surfaces[b] = BoneSurface::new(points, s.normals.clone());
+            }
+            for c in self.capsules.iter_mut().filter(|c| c.bone == b) {
+                c.radius_a += t;
+                c.radius_b += t;
+            }
+        }
+    }
+
     /// The tracker's body from a (shaped) MakeHuman body: all of its vertex `positions`.
     pub fn new(model: &BodyModel, positions: &[Vec3]) -> Result<Self, ModelError> {
         let bone = |name: &str| {

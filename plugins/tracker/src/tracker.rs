@@ -75,6 +75,10 @@ pub struct TrackerSettings {
     /// 0.75 of his height.) Longer, or elsewhere: a new person.
     pub keep_person_s: f64,
     pub same_person_m: f32,
+    /// A layer of clothing this thick on the trunk and upper arms ([`TrackBody::clothe`]) is
+    /// tried on the person's build once it is found, and kept if it explains the kept frames
+    /// better ([`crate::shape`]); 0: never.
+    pub clothing_m: f32,
 }
 
 impl Default for TrackerSettings {
@@ -97,6 +101,7 @@ impl Default for TrackerSettings {
             parts_min_weight: 2.0,
             keep_person_s: 0.5,
             same_person_m: 1.0,
+            clothing_m: 0.025,
         }
     }
 }
@@ -365,7 +370,14 @@ impl Tracker {
                 tracker_settings.points = settings.points;
                 let build_fit = self.build_fit.clone();
                 let search = move || match build_fit {
-                    Some(fit) => estimate_with(&model, &*fit, &kept),
+                    Some(fit) => estimate_with(
+                        &model,
+                        &*fit,
+                        &body,
+                        &kept,
+                        &tracker_settings,
+                        settings.iterations,
+                    ),
                     None => estimate(&model, &body, &kept, &tracker_settings, settings.iterations),
                 };
                 if settings.background {

@@ -39,7 +39,7 @@ use crate::prior::GenderPrior;
 use crate::silhouette::OutsideDistance;
 use crate::view::AveragedView;
 use normal::ViewJacobian;
-use residuals::{Problem, Row, faces_of};
+use residuals::{Problem, Row, clothed_vertices, faces_of};
 
 /// How the body is fitted.
 #[derive(Clone, Debug)]
@@ -66,6 +66,10 @@ pub struct FitSettings {
     pub refine_bones: Vec<&'static str>,
     /// Pull of the refined turns to the given pose, m² per rad².
     pub pose_prior: f32,
+    /// A layer of clothing this thick on the trunk and the upper arms (where a shirt is),
+    /// metres: the surface seen is the skin moved out along its normals there, and the body
+    /// found is the one under it. 0: none.
+    pub clothing_m: f32,
     /// Weight of the shape prior (m² per unit of squared Mahalanobis distance); without a
     /// prior, the pull to the default body (m² per slider unit²).
     pub prior: f32,
@@ -83,6 +87,7 @@ impl Default for FitSettings {
             outside_weight: 1.0,
             refine_bones: REFINED.to_vec(),
             pose_prior: 1e-4,
+            clothing_m: 0.0,
             prior: 2e-4,
         }
     }
@@ -227,6 +232,7 @@ pub fn fit_body(
     let shape = space.shape(&x);
     let mut points_total = 0;
     let faces = faces_of(model.body_vertex_count as usize, &model.triangles);
+    let layer = clothed_vertices(model, settings.clothing_m);
     let carried = carried_weights(model, &bones, model.body_vertex_count as usize);
     let mut states: Vec<ViewState> = Vec::with_capacity(views.len());
     for vp in views {
@@ -239,6 +245,7 @@ pub fn fit_body(
             pixels,
             outside: OutsideDistance::new(&vp.view.mask),
             faces_of: &faces,
+            layer: &layer,
             settings,
         };
         let posing = Posing::new(model, vp.locals.to_vec());

@@ -50,7 +50,42 @@ pub(super) struct Problem<'a> {
     pub(super) outside: OutsideDistance,
     /// Per body vertex, the triangles it is a corner of.
     pub(super) faces_of: &'a [Vec<u32>],
+    /// Per body vertex, whether the clothing layer covers it ([`clothed_vertices`]; empty:
+    /// no layer).
+    pub(super) layer: &'a [bool],
     pub(super) settings: &'a FitSettings,
+}
+
+/// The bones a shirt covers: the trunk, the clavicles and the upper arms (as the tracker's
+/// `TrackBody::clothe`).
+const CLOTHED_BONES: [&str; 8] = [
+    "pelvis",
+    "spine_01",
+    "spine_02",
+    "spine_03",
+    "clavicle_l",
+    "clavicle_r",
+    "upperarm_l",
+    "upperarm_r",
+];
+
+/// Per body vertex of `model`, whether a layer of clothing `t` thick covers it: its dominant
+/// bone is one a shirt covers. Empty when `t` is 0.
+pub(super) fn clothed_vertices(model: &BodyModel, t: f32) -> Vec<bool> {
+    if t <= 0.0 {
+        return Vec::new();
+    }
+    let bones: Vec<usize> = CLOTHED_BONES
+        .iter()
+        .filter_map(|name| model.bone_index(name))
+        .collect();
+    model
+        .skin_joints
+        .iter()
+        .zip(&model.skin_weights)
+        .take(model.body_vertex_count as usize)
+        .map(|(j, w)| w[0] > 0.0 && bones.contains(&usize::from(j[0])))
+        .collect()
 }
 
 /// Per vertex of `count`, the triangles of `triangles` it is a corner of.
@@ -113,8 +148,25 @@ impl Problem<'_> {
         }
     }
 
-    /// The residual rows of `body`: the surface points, then the silhouette.
+    /// The residual rows of `body` (under the clothing layer, if any): the surface points,
+    /// then the silhouette. The layer moves the surface, not the rows' motions: a vertex
+    /// moved by the sliders carries its layer along.
     pub(super) fn rows(&self, body: &PosedBody) -> Vec<Row> {
+        let t = self.settings.clothing_m;
+        if t <= 0.0 || self.layer.is_empty() {
+            return self.rows_of(body);
+        }
+        let normals = compute_normals(&body.vertices, &self.model.triangles);
+        let mut clothed = body.clone();
+        for ((v, n), &on) in clothed.vertices.iter_mut().zip(&normals).zip(self.layer) {
+            if on {
+                *v += *n * t;
+            }
+        }
+        self.rows_of(&clothed)
+    }
+
+    fn rows_of(&self, body: &PosedBody) -> Vec<Row> {
         let s = self.settings;
         let normals = compute_normals(&body.vertices, &self.model.triangles);
         // Skin the camera can see: turned towards it.
