@@ -75,9 +75,9 @@ pub struct TrackerSettings {
     /// 0.75 of his height.) Longer, or elsewhere: a new person.
     pub keep_person_s: f64,
     pub same_person_m: f32,
-    /// A layer of clothing this thick on the trunk and upper arms ([`TrackBody::clothe`]) is
-    /// tried on the person's build once it is found, and kept if it explains the kept frames
-    /// better ([`crate::shape`]); 0: never.
+    /// The person's build is found bare and under a layer of clothing this thick on the
+    /// trunk and upper arms ([`TrackBody::clothe`]), and the clothed body is kept if it
+    /// explains the kept frames better ([`crate::shape`]); 0: bare only.
     pub clothing_m: f32,
 }
 
