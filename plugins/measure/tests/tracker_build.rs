@@ -138,22 +138,10 @@ fn clothed_snapshots(
     seed: u64,
 ) -> Vec<Snapshot> {
     let mut rest = model.shaped(shape).expect("a body").positions;
-    let bones: Vec<usize> = [
-        "pelvis",
-        "spine_01",
-        "spine_02",
-        "spine_03",
-        "clavicle_l",
-        "clavicle_r",
-        "upperarm_l",
-        "upperarm_r",
-    ]
-    .iter()
-    .filter_map(|n| model.bone_index(n))
-    .collect();
+    let covered = fitroom_tracker::model::clothed_vertices(model);
     let normals = fitroom_body::compute_normals(&rest, &model.triangles);
-    for ((v, n), j) in rest.iter_mut().zip(&normals).zip(&model.skin_joints) {
-        if bones.contains(&usize::from(j[0])) {
+    for ((v, n), &on) in rest.iter_mut().zip(&normals).zip(&covered) {
+        if on {
             *v += *n * layer_m;
         }
     }

@@ -77,6 +77,35 @@ const TRACKED: [(&str, bool, f32, f32, f32); 18] = [
     ("spine_02", false, 15.0, 15.0, 6.0),
 ];
 
+/// The bones a shirt covers: the trunk, the clavicles and the upper arms (the clothing layer
+/// of [`TrackBody::clothe`] and of the measurement's fit).
+pub const CLOTHED_BONES: [&str; 8] = [
+    "pelvis",
+    "spine_01",
+    "spine_02",
+    "spine_03",
+    "clavicle_l",
+    "clavicle_r",
+    "upperarm_l",
+    "upperarm_r",
+];
+
+/// Per body vertex of `model`, whether a shirt covers it: its dominant bone is one of
+/// [`CLOTHED_BONES`].
+pub fn clothed_vertices(model: &BodyModel) -> Vec<bool> {
+    let bones: Vec<usize> = CLOTHED_BONES
+        .iter()
+        .filter_map(|name| model.bone_index(name))
+        .collect();
+    model
+        .skin_joints
+        .iter()
+        .zip(&model.skin_weights)
+        .take(model.body_vertex_count as usize)
+        .map(|(j, w)| w[0] > 0.0 && bones.contains(&usize::from(j[0])))
+        .collect()
+}
+
 /// Why a body cannot be tracked.
 #[derive(Clone, Debug, PartialEq, thiserror::Error)]
 pub enum ModelError {
@@ -104,6 +133,8 @@ pub struct TrackBody {
     pub drivers: [usize; KinectJoint::COUNT],
     /// The bone at the root of the rig (the pelvis).
     pub root: usize,
+    /// The bones a shirt covers ([`CLOTHED_BONES`]), for [`TrackBody::clothe`].
+    pub clothed: Vec<usize>,
     /// Sole to the top of the head, metres.
     pub height_m: f32,
     /// The lowest body vertex's model-space height (the soles).
@@ -149,25 +180,14 @@ impl Posed {
 }
 
 impl TrackBody {
-    /// This body with a layer of clothing `t` metres thick on the trunk, the clavicles and
-    /// the upper arms (where a shirt is): their skin moved out along its normals, their
-    /// capsules' radii grown.
+    /// This body with a layer of clothing `t` metres thick on the bones a shirt covers
+    /// ([`CLOTHED_BONES`]): their skin moved out along its normals, their capsules' radii
+    /// grown.
     pub fn clothe(&mut self, t: f32) {
         if t <= 0.0 {
             return;
         }
-        let mut bones = Vec::new();
-        let mut b = self.parents[self.kinect[KinectJoint::ShoulderCenter.index()].0];
-        while let Some(x) = b {
-            bones.push(x);
-            b = self.parents[x];
-        }
-        for side in [KinectJoint::ShoulderLeft, KinectJoint::ShoulderRight] {
-            let arm = self.kinect[side.index()].0;
-            bones.push(arm);
-            bones.extend(self.parents[arm]);
-        }
-        for b in bones {
+        for &b in &self.clothed {
             if let Some(s) = self.surfaces.get(b) {
                 let points = s
                     .points
@@ -366,6 +386,10 @@ impl TrackBody {
             kinect,
             drivers,
             root: bone("pelvis").unwrap_or(root),
+            clothed: CLOTHED_BONES
+                .iter()
+                .filter_map(|name| model.bone_index(name))
+                .collect(),
             height_m: (hi - lo).max(0.1),
             sole_y: if lo.is_finite() { lo } else { 0.0 },
             rest_driver_rotations,

@@ -212,26 +212,7 @@ fn a_moment_away_keeps_the_build_and_the_next_person_starts_from_the_default_bod
 fn found_clothed(layer_m: f32, seed: u64) -> f32 {
     let person = shaped_body(&Shape::default());
     let model = Arc::new(common::model());
-    let covered: Vec<bool> = {
-        let bones: Vec<usize> = [
-            "pelvis",
-            "spine_01",
-            "spine_02",
-            "spine_03",
-            "clavicle_l",
-            "clavicle_r",
-            "upperarm_l",
-            "upperarm_r",
-        ]
-        .iter()
-        .filter_map(|n| model.bone_index(n))
-        .collect();
-        model
-            .skin_joints
-            .iter()
-            .map(|j| bones.contains(&usize::from(j[0])))
-            .collect()
-    };
+    let covered = fitroom_tracker::model::clothed_vertices(&model);
     let mut tracker =
         Tracker::estimating(model.clone(), TrackerSettings::default()).expect("a tracker");
     for k in 0..30 {

@@ -56,36 +56,13 @@ pub(super) struct Problem<'a> {
     pub(super) settings: &'a FitSettings,
 }
 
-/// The bones a shirt covers: the trunk, the clavicles and the upper arms (as the tracker's
-/// `TrackBody::clothe`).
-const CLOTHED_BONES: [&str; 8] = [
-    "pelvis",
-    "spine_01",
-    "spine_02",
-    "spine_03",
-    "clavicle_l",
-    "clavicle_r",
-    "upperarm_l",
-    "upperarm_r",
-];
-
-/// Per body vertex of `model`, whether a layer of clothing `t` thick covers it: its dominant
-/// bone is one a shirt covers. Empty when `t` is 0.
+/// Per body vertex of `model`, whether a layer of clothing `t` thick covers it
+/// ([`fitroom_tracker::model::clothed_vertices`]). Empty when `t` is 0.
 pub(super) fn clothed_vertices(model: &BodyModel, t: f32) -> Vec<bool> {
     if t <= 0.0 {
         return Vec::new();
     }
-    let bones: Vec<usize> = CLOTHED_BONES
-        .iter()
-        .filter_map(|name| model.bone_index(name))
-        .collect();
-    model
-        .skin_joints
-        .iter()
-        .zip(&model.skin_weights)
-        .take(model.body_vertex_count as usize)
-        .map(|(j, w)| w[0] > 0.0 && bones.contains(&usize::from(j[0])))
-        .collect()
+    fitroom_tracker::model::clothed_vertices(model)
 }
 
 /// Per vertex of `count`, the triangles of `triangles` it is a corner of.
