@@ -70,7 +70,7 @@ impl Default for ShapeSettings {
         // over the recording (both used from the first frame: 30.0 and 29.9 mm).
         // A second look (session 40; `fitroom track eval` on the 90 bare and T-shirt
         // recordings): the T-shirt's men measured 3-18 cm short by the first look mostly
-        // within 2 cm; mean / trunk 56.3 / 39.4 -> 55.9 / 38.0 mm. A third look: the same.
+        // within 2 cm; mean / trunk 56.3 / 39.4 -> 55.9 / 37.9 mm. A third look: the same.
         Self {
             snapshots: 3,
             every: 1,
