@@ -4,8 +4,12 @@
 //! measurement's recordings film them): the body it gives has the person's stature, and the
 //! trunk's joints come out nearer the truth than with the tracker's own search.
 
-use std::path::Path;
 use std::sync::Arc;
+
+/// The tracker's own test helpers: the shipped body posed by the body crate's skinning, filmed
+/// in a room.
+#[path = "../../tracker/tests/common/mod.rs"]
+mod common;
 
 use fitroom_body::{BodyModel, Shape};
 use fitroom_depth::synthetic::{Label, NoiseSettings};
@@ -17,8 +21,13 @@ use fitroom_tracker::shape::{BuildFit, Snapshot};
 use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
 
 fn model() -> Arc<BodyModel> {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("../../assets/bodies/makehuman.fitbody");
-    Arc::new(BodyModel::read(&path).expect("the shipped body"))
+    Arc::new(common::model())
+}
+
+/// The stature (cm) of the body of `shape`.
+fn stature_cm(model: &BodyModel, shape: &Shape) -> f32 {
+    let body = model.shaped(shape).expect("a body");
+    model.measure(&body.positions).expect("measured").stature_cm
 }
 
 /// The trunk's mean error (mm) from frame 10 on of `shape` filmed standing (noise and stance
@@ -102,11 +111,7 @@ fn the_body_fit_gives_the_tracker_the_persons_stature_and_a_nearer_trunk() {
         let (own, _) = trunk_error_mm(&model, shape, seed, tracker());
         let with_fit = tracker().with_build_fit(Arc::new(TrackedBuild::new(prior.clone())));
         let (fit, found) = trunk_error_mm(&model, shape, seed, with_fit);
-        let stature = |s: &Shape| {
-            let body = model.shaped(s).expect("a body");
-            model.measure(&body.positions).expect("measured").stature_cm
-        };
-        let (truth_cm, found_cm) = (stature(shape), stature(&found));
+        let (truth_cm, found_cm) = (stature_cm(&model, shape), stature_cm(&model, &found));
         println!(
             "seed {seed}: trunk {own:.1} mm with the tracker's search, {fit:.1} with the body fit; stature {truth_cm:.1} cm, found {found_cm:.1}"
         );
@@ -215,10 +220,6 @@ fn the_body_fit_under_a_layer_of_clothing_finds_the_body_under_it() {
     }
 }
 
-/// The tracker's own test helpers: a body posed by the body crate's skinning, filmed in a room.
-#[path = "../../tracker/tests/common/mod.rs"]
-mod common;
-
 /// A jump's crouch: thighs raised, knees bent deep, the trunk bowed forward.
 const CROUCH: common::Turns = &[
     ("thigh_l", glam::Vec3::X, -100.0),
@@ -272,8 +273,7 @@ fn stature_after_a_crouch_cm(
         .person_shape()
         .cloned()
         .unwrap_or_else(|| panic!("no build estimated: {:?}", tracker.shape_error));
-    let body = model.shaped(&found).expect("a body");
-    model.measure(&body.positions).expect("measured").stature_cm
+    stature_cm(model, &found)
 }
 
 /// A man first seen crouching (a jump's start) is started on a body sized to the crouch, and
@@ -289,10 +289,7 @@ fn a_man_first_seen_crouching_is_given_his_standing_stature() {
         height: 0.6,
         ..Shape::default()
     };
-    let truth = {
-        let body = model.shaped(&shape).expect("a body");
-        model.measure(&body.positions).expect("measured").stature_cm
-    };
+    let truth = stature_cm(&model, &shape);
     for seed in [300, 500] {
         let first = stature_after_a_crouch_cm(&model, &shape, seed, 1);
         let second = stature_after_a_crouch_cm(&model, &shape, seed, 2);
