@@ -8,10 +8,11 @@
 //!    floor, feet near it (or cut off by the image's bottom edge), at most 2 m wide and 2 m
 //!    deep, and enough pixels for its distance;
 //! 4. of the people, the one who overlaps the last frame's person most is kept (so someone
-//!    walking behind does not take over); without one, the person nearest the centre of the
-//!    interaction area;
+//!    walking behind does not take over); without one, the pieces the last frame's person
+//!    was parted into (a deep bow), if together they look like a person; else the person
+//!    nearest the centre of the interaction area;
 //! 5. the parts of that person a depth edge cut off (the far arm seen past their back, a
-//!    hand held out) are added to them (module `parts`).
+//!    hand held out, the trunk of a deep bow) are added to them (module `parts`).
 //!
 //! The result is the user map the Kinect SDK gave seed 000 (libfreenect has none).
 
@@ -202,9 +203,10 @@ impl Stats {
         self.top_m > MAX_CUT_TOP_M && self.top_row_pixels * 10 > width * 9
     }
 
-    /// Takes in `part`'s pixels (not its border counts or overlap, used before).
+    /// Takes in `part`'s pixels and overlap (not its border counts, used before).
     fn add(&mut self, part: &Stats) {
         self.pixels += part.pixels;
+        self.overlap += part.overlap;
         self.sum += part.sum;
         self.area_m2 += part.area_m2;
         self.min = self.min.min(part.min);
@@ -256,7 +258,13 @@ impl Segmenter {
         } = &mut self.scratch;
         components.find(depth, s.join_m);
         self.gather(frame, &floor);
-        let stats = &self.scratch.stats;
+        let Scratch {
+            components,
+            stats,
+            parts,
+            ..
+        } = &mut self.scratch;
+        let (runs, stats) = (&components.runs, &*stats);
         let people: Vec<usize> = (1..stats.len())
             .filter(|&c| stats[c].looks_like_a_person(&s))
             .collect();
@@ -267,34 +275,47 @@ impl Segmenter {
         // The last frame's person, while a third of their pixels are still theirs; else the
         // one nearest the interaction area.
         let previous_pixels = self.previous.as_ref().map_or(0, |&(_, pixels)| pixels);
+        let followed = |c: usize| previous_pixels > 0 && stats[c].overlap * 3 > previous_pixels;
+        let nearest = || {
+            people
+                .iter()
+                .copied()
+                .min_by(|&a, &b| distance(&stats[a]).total_cmp(&distance(&stats[b])))
+        };
         let chosen = people
             .iter()
             .copied()
-            .filter(|&c| stats[c].overlap * 3 > previous_pixels && previous_pixels > 0)
-            .max_by_key(|&c| stats[c].overlap)
-            .or_else(|| {
-                people
-                    .iter()
-                    .copied()
-                    .min_by(|&a, &b| distance(&stats[a]).total_cmp(&distance(&stats[b])))
+            .filter(|&c| followed(c))
+            .max_by_key(|&c| stats[c].overlap);
+        let mut person_from = |chosen: usize| {
+            let join = s.join_parts.then_some(PartsOf {
+                raw_mm: &frame.depth_mm,
+                people: &people,
+                parts: &mut *parts,
             });
-        let Some(chosen) = chosen else {
+            person_from(chosen, runs, stats, join)
+        };
+        let mut found = chosen.map(&mut person_from);
+        if found.is_none() {
+            // Parted by depth edges, no piece of the last frame's person may look like a
+            // person by itself (bowed deep, the legs reach up to the hips only and the trunk
+            // does not reach down to the floor): the piece mostly theirs that overlaps them
+            // most, with the rest of them joined as its parts, if together they do and a
+            // third of their pixels are still theirs.
+            let piece = (1..stats.len())
+                .filter(|&c| !stats[c].too_large && stats[c].overlap * 2 > stats[c].pixels)
+                .max_by_key(|&c| stats[c].overlap);
+            found = piece
+                .map(&mut person_from)
+                .filter(|(_, c)| c.looks_like_a_person(&s) && c.overlap * 3 > previous_pixels);
+        }
+        if found.is_none() {
+            found = nearest().map(&mut person_from);
+        }
+        let Some((mask, c)) = found else {
             self.previous = None;
             return None;
         };
-        let mut c = stats[chosen];
-        let chosen = chosen as u32;
-        let runs = &self.scratch.components.runs;
-        let mut mask = vec![false; PIXELS];
-        fill(&mut mask, runs, chosen);
-        if s.join_parts {
-            let parts = &mut self.scratch.parts;
-            parts::parts_of(chosen, &mask, &frame.depth_mm, runs, stats, &people, parts);
-            for &(part, _) in parts.iter() {
-                fill(&mut mask, runs, part);
-                c.add(&stats[part as usize]);
-            }
-        }
         // Kept in the last frame's buffer when there is one (no allocation).
         match &mut self.previous {
             Some((previous, pixels)) => {
@@ -517,6 +538,39 @@ impl Segmenter {
         self.floor = fit_floor(samples, &self.settings.floor);
         self.floor.map(|(plane, _)| plane)
     }
+}
+
+/// What the parts of a person are found among (module `parts`): the frame's raw depth, the
+/// components that look like people, and the parts' scratch.
+struct PartsOf<'a> {
+    raw_mm: &'a [u16],
+    people: &'a [usize],
+    parts: &'a mut Vec<(u32, usize)>,
+}
+
+/// The pixels of component `chosen` of `runs` and its stats, with its parts when `join` says
+/// where to find them.
+fn person_from(
+    chosen: usize,
+    runs: &[components::Run],
+    stats: &[Stats],
+    join: Option<PartsOf>,
+) -> (Vec<bool>, Stats) {
+    let mut c = stats[chosen];
+    let mut mask = vec![false; PIXELS];
+    fill(&mut mask, runs, chosen as u32);
+    if let Some(PartsOf {
+        raw_mm,
+        people,
+        parts,
+    }) = join
+    {
+        parts::parts_of(chosen as u32, &mut mask, raw_mm, runs, stats, people, parts);
+        for &(part, _) in parts.iter() {
+            c.add(&stats[part as usize]);
+        }
+    }
+    (mask, c)
 }
 
 /// Sets the pixels of `component`'s runs in `mask`.

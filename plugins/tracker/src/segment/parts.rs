@@ -8,6 +8,12 @@
 //!
 //! Without them the tracker saw no far arm (its fit left the arm where the last frame had
 //! it) and the measurement lost a thousand pixels of the turned view.
+//!
+//! A component mostly made of the last frame's person's pixels is theirs whatever its size,
+//! depth or height: bowing deep towards the sensor, the trunk comes in front of the thighs,
+//! half a metre nearer than the legs, and with the hands hanging near the floor it looks like
+//! a person of its own. A part may border the person through another part (the head, parted
+//! from that trunk).
 
 use fitroom_depth::{HEIGHT, WIDTH};
 
@@ -37,11 +43,12 @@ const MIN_TOUCH: usize = 4;
 
 /// Fills `parts` with the components (numbers of `runs`) that are parts of the `person`
 /// component, whose pixels are `mask`, each with the count of its pixels that border the
-/// person (up to [`MIN_TOUCH`]); `people` are the other components that look like people
-/// themselves. (`parts` is the segmenter's scratch: no allocation per frame.)
+/// person or a part joined before (up to [`MIN_TOUCH`]), and adds their pixels to `mask`;
+/// `people` are the other components that look like people themselves. (`parts` is the
+/// segmenter's scratch: no allocation per frame.)
 pub(super) fn parts_of(
     person: u32,
-    mask: &[bool],
+    mask: &mut [bool],
     raw_mm: &[u16],
     runs: &[Run],
     stats: &[Stats],
@@ -53,14 +60,16 @@ pub(super) fn parts_of(
         return;
     };
     let candidate = |c: usize, s: &Stats| {
+        let was_theirs = s.overlap * 2 > s.pixels;
         c != 0
             && c != person as usize
-            && !people.contains(&c)
             && !s.too_large
             && s.pixels >= MIN_PIXELS
-            && s.area_m2 <= MAX_AREA_M2
-            && s.bottom_m >= ABOVE_FLOOR_M
-            && s.min.z >= p.min.z - IN_FRONT_M
+            && (was_theirs
+                || (!people.contains(&c)
+                    && s.area_m2 <= MAX_AREA_M2
+                    && s.bottom_m >= ABOVE_FLOOR_M
+                    && s.min.z >= p.min.z - IN_FRONT_M))
             && s.max.z <= p.max.z + BEHIND_M
             && s.min.x >= p.min.x - REACH_M
             && s.max.x <= p.max.x + REACH_M
@@ -76,29 +85,52 @@ pub(super) fn parts_of(
         return;
     }
     // Candidates are few (none in most frames): found among them by a look along the list.
-    for run in runs {
-        let Some((_, touches)) = parts.iter_mut().find(|(c, _)| *c == run.component) else {
-            continue;
-        };
-        let (row, start, end) = (
-            usize::from(run.row),
-            usize::from(run.start),
-            usize::from(run.end),
-        );
-        for col in start..end {
-            if *touches >= MIN_TOUCH {
-                break;
+    // A part may border the person through another part (a head parted from the trunk that
+    // a deep bow parted from the legs): looked at again while parts join.
+    let mut joined = 0;
+    loop {
+        for (_, touches) in &mut parts[joined..] {
+            *touches = 0;
+        }
+        for run in runs {
+            let Some((_, touches)) = parts[joined..]
+                .iter_mut()
+                .find(|(c, _)| *c == run.component)
+            else {
+                continue;
+            };
+            let (row, start, end) = (
+                usize::from(run.row),
+                usize::from(run.start),
+                usize::from(run.end),
+            );
+            for col in start..end {
+                if *touches >= MIN_TOUCH {
+                    break;
+                }
+                let ends = [(col == start, Step::Left), (col + 1 == end, Step::Right)];
+                let sideways = ends.iter().filter(|(at, _)| *at).map(|(_, s)| *s);
+                let touching = [Step::Up, Step::Down]
+                    .into_iter()
+                    .chain(sideways)
+                    .any(|step| reaches_person(mask, raw_mm, row, col, step));
+                *touches += usize::from(touching);
             }
-            let ends = [(col == start, Step::Left), (col + 1 == end, Step::Right)];
-            let sideways = ends.iter().filter(|(at, _)| *at).map(|(_, s)| *s);
-            let touching = [Step::Up, Step::Down]
-                .into_iter()
-                .chain(sideways)
-                .any(|step| reaches_person(mask, raw_mm, row, col, step));
-            *touches += usize::from(touching);
+        }
+        // The parts that touch move to the front, after those joined before, and join.
+        let before = joined;
+        for k in before..parts.len() {
+            if parts[k].1 >= MIN_TOUCH {
+                parts.swap(joined, k);
+                super::fill(mask, runs, parts[joined].0);
+                joined += 1;
+            }
+        }
+        if joined == before || joined == parts.len() {
+            break;
         }
     }
-    parts.retain(|&(_, touches)| touches >= MIN_TOUCH);
+    parts.truncate(joined);
 }
 
 #[derive(Clone, Copy)]
