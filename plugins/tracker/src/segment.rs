@@ -6,7 +6,8 @@
 //!    (module `components`: a scanline labelling, row by row, exactly a flood fill's result);
 //! 3. a component is a person if its size and extent are a person's: top 0.9-2.3 m above the
 //!    floor, feet near it (or cut off by the image's bottom edge), at most 2 m wide and 2 m
-//!    deep, and enough pixels for its distance;
+//!    deep, and enough pixels for its distance (the person of the last frame may be lower,
+//!    bowed or crouched, or higher off the floor, leaping);
 //! 4. of the people, the one who overlaps the last frame's person most is kept (so someone
 //!    walking behind does not take over); without one, the pieces the last frame's person
 //!    was parted into (a deep bow), if together they look like a person; else the person
@@ -137,6 +138,12 @@ const MAX_WIDTH_M: f32 = 2.0;
 /// one in 8 of 150 frames of CMU 05_06).
 const MAX_DEPTH_M: f32 = 2.0;
 
+/// A person followed from the last frame may have their top this low, metres (a small
+/// woman bowed deep reaches 0.89 m: CMU 05_06) ...
+const FOLLOWED_TOP_M: f32 = 0.6;
+/// ... and their lowest point this high (a dancer's leap: 0.50 m), metres.
+const FOLLOWED_BOTTOM_M: f32 = 1.0;
+
 /// Bordering components are told apart in depth by at least this much, metres.
 const NEARER_M: f32 = 0.05;
 /// The image's top edge meets a person's head lower than this above the floor, metres (it may
@@ -182,12 +189,18 @@ impl Stats {
         }
     }
 
-    fn looks_like_a_person(&self, settings: &SegmentSettings) -> bool {
+    /// Whether its size and extent are a person's; one `followed` from the last frame may
+    /// also be bowed or crouched lower, or leap higher off the floor.
+    fn looks_like_a_person(&self, settings: &SegmentSettings, followed: bool) -> bool {
         let extent = self.max - self.min;
+        let (lowest_top, highest_bottom) = match followed {
+            false => (0.9, 0.5),
+            true => (FOLLOWED_TOP_M, FOLLOWED_BOTTOM_M),
+        };
         !self.too_large
             && self.area_m2 >= settings.min_area_m2
-            && (0.9..2.3).contains(&self.top_m)
-            && (self.bottom_m < 0.5 || self.touches_bottom_row)
+            && (lowest_top..2.3).contains(&self.top_m)
+            && (self.bottom_m < highest_bottom || self.touches_bottom_row)
             && extent.x < MAX_WIDTH_M
             && extent.z < MAX_DEPTH_M
             && !self.mostly_behind()
@@ -266,7 +279,7 @@ impl Segmenter {
         } = &mut self.scratch;
         let (runs, stats) = (&components.runs, &*stats);
         let people: Vec<usize> = (1..stats.len())
-            .filter(|&c| stats[c].looks_like_a_person(&s))
+            .filter(|&c| stats[c].looks_like_a_person(&s, false))
             .collect();
         let distance = |c: &Stats| {
             let centroid = c.sum / c.pixels as f32;
@@ -282,10 +295,8 @@ impl Segmenter {
                 .copied()
                 .min_by(|&a, &b| distance(&stats[a]).total_cmp(&distance(&stats[b])))
         };
-        let chosen = people
-            .iter()
-            .copied()
-            .filter(|&c| followed(c))
+        let chosen = (1..stats.len())
+            .filter(|&c| followed(c) && stats[c].looks_like_a_person(&s, true))
             .max_by_key(|&c| stats[c].overlap);
         let mut person_from = |chosen: usize| {
             let join = s.join_parts.then_some(PartsOf {
@@ -305,9 +316,9 @@ impl Segmenter {
             let piece = (1..stats.len())
                 .filter(|&c| !stats[c].too_large && stats[c].overlap * 2 > stats[c].pixels)
                 .max_by_key(|&c| stats[c].overlap);
-            found = piece
-                .map(&mut person_from)
-                .filter(|(_, c)| c.looks_like_a_person(&s) && c.overlap * 3 > previous_pixels);
+            found = piece.map(&mut person_from).filter(|(_, c)| {
+                c.looks_like_a_person(&s, true) && c.overlap * 3 > previous_pixels
+            });
         }
         if found.is_none() {
             found = nearest().map(&mut person_from);
