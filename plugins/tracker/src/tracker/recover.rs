@@ -6,7 +6,7 @@
 //! much of the person is left unexplained; an arm folded up on itself) and a second
 //! hypothesis is fitted: the limb (both legs, for crossed legs) back at rest and pulled to
 //! the geodesic extrema of its hand or foot, as a start is, and for an arm also with the
-//! forearm bent forward and at rest fitted to the depth alone, and, with a body-part forest ([`crate::bodyparts`]), pulled to the
+//! forearm bent forward, and, with a body-part forest ([`crate::bodyparts`]), pulled to the
 //! forest's joint proposals; an arm held before the body ([`super::front`]) is tried with
 //! its hand pulled to what stands out there. A hypothesis is kept when it explains the frame
 //! better.
@@ -87,10 +87,6 @@ enum Hypothesis {
     Proposed,
     /// An arm with its forearm bent forward and its hand pulled to a point before the body.
     Held(Vec3),
-    /// An arm at rest, fitted to the depth alone: a hand hanging beside the hip is no
-    /// geodesic extremum (the extremum pulled the arm elsewhere), and the followed fit
-    /// leaves its forearm folded up along the upper arm.
-    Rest,
 }
 
 /// A limb with fewer data points on its upper and lower bones than this is suspected lost.
@@ -167,10 +163,8 @@ impl Tracker {
         self.propose(frame, person);
         let (mut best, mut best_fit) = (pose, fit);
         // Each suspect at rest, pulled to its extrema; an arm also with its forearm bent
-        // forward a right angle (a hand in front of the belly shows no extremum) and at rest
-        // without a pull (a hand hanging beside the hip shows none either: the legs, tried
-        // so too, lost the dance's raised legs); with a body-part forest, a single limb also
-        // pulled to the forest's proposals.
+        // forward a right angle (a hand in front of the belly shows no extremum); with a
+        // body-part forest, a single limb also pulled to the forest's proposals.
         let mut tries: Vec<(Vec<Limb>, Hypothesis)> = Vec::new();
         let proposed = |limb: Limb| {
             limb.joints()
@@ -181,7 +175,6 @@ impl Tracker {
             if let [limb] = limbs[..] {
                 if limb.shoulder().is_some() {
                     tries.push((vec![limb], Hypothesis::Bent));
-                    tries.push((vec![limb], Hypothesis::Rest));
                 }
                 if proposed(limb) {
                     tries.push((vec![limb], Hypothesis::Proposed));
@@ -230,8 +223,6 @@ impl Tracker {
                     {
                         candidate.local[forearm] = Quat::from_axis_angle(axis, FRAC_PI_2);
                     }
-                } else if how == Hypothesis::Rest {
-                    // No target: the depth alone.
                 } else if let Some(e) = ends.iter().find(|e| e.part == limb.end()) {
                     targets.push((limb.end_joint().index(), e.joint, 1.0));
                 }
