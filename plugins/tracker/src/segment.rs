@@ -138,6 +138,10 @@ const MAX_WIDTH_M: f32 = 2.0;
 /// one in 8 of 150 frames of CMU 05_06).
 const MAX_DEPTH_M: f32 = 2.0;
 
+/// A person first seen has their top at least this high above the floor, metres ...
+const MIN_TOP_M: f32 = 0.9;
+/// ... and their lowest point at most this high (or cut off by the image's bottom edge).
+const MAX_BOTTOM_M: f32 = 0.5;
 /// A person followed from the last frame may have their top this low, metres (a small
 /// woman bowed deep reaches 0.89 m: CMU 05_06) ...
 const FOLLOWED_TOP_M: f32 = 0.6;
@@ -194,7 +198,7 @@ impl Stats {
     fn looks_like_a_person(&self, settings: &SegmentSettings, followed: bool) -> bool {
         let extent = self.max - self.min;
         let (lowest_top, highest_bottom) = match followed {
-            false => (0.9, 0.5),
+            false => (MIN_TOP_M, MAX_BOTTOM_M),
             true => (FOLLOWED_TOP_M, FOLLOWED_BOTTOM_M),
         };
         !self.too_large
@@ -234,6 +238,11 @@ impl Stats {
             self.bbox[2].max(part.bbox[2]),
             self.bbox[3].max(part.bbox[3]),
         ];
+    }
+
+    /// Whether over half of its pixels were the last frame's person's.
+    fn was_theirs(&self) -> bool {
+        self.overlap * 2 > self.pixels
     }
 
     /// A person stands in front of what surrounds them; a surface seen between nearer ones
@@ -314,7 +323,7 @@ impl Segmenter {
             // most, with the rest of them joined as its parts, if together they do and a
             // third of their pixels are still theirs.
             let piece = (1..stats.len())
-                .filter(|&c| !stats[c].too_large && stats[c].overlap * 2 > stats[c].pixels)
+                .filter(|&c| !stats[c].too_large && stats[c].was_theirs())
                 .max_by_key(|&c| stats[c].overlap);
             found = piece.map(&mut person_from).filter(|(_, c)| {
                 c.looks_like_a_person(&s, true) && c.overlap * 3 > previous_pixels

@@ -60,12 +60,11 @@ pub(super) fn parts_of(
         return;
     };
     let candidate = |c: usize, s: &Stats| {
-        let was_theirs = s.overlap * 2 > s.pixels;
         c != 0
             && c != person as usize
             && !s.too_large
             && s.pixels >= MIN_PIXELS
-            && (was_theirs
+            && (s.was_theirs()
                 || (!people.contains(&c)
                     && s.area_m2 <= MAX_AREA_M2
                     && s.bottom_m >= ABOVE_FLOOR_M
