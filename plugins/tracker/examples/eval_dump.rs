@@ -11,7 +11,7 @@
 //!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
-//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ASYM` (the trunk's outside weight), `CLOTHING` (the
+//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTHING` (the
 //!   clothing layer tried, metres; 0: none): override the settings; `INFLATE=T`: the given
 //!   `SHAPE` in a clothing layer T metres thick;
 //! * `PARTS=F.forest`: a body-part forest's joint proposals as one more hypothesis for a
@@ -74,8 +74,8 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("TURN_MARGIN") {
         s.turn_margin = v;
     }
-    if let Some(v) = env("ASYM") {
-        s.fit.outside_weight = v;
+    if let Some(v) = env("ARM_FRONT_CAP") {
+        s.fit.arm_front_cap_m = v;
     }
     if let Some(v) = env("CLOTHING") {
         s.clothing_m = v;

@@ -5,12 +5,12 @@
 //!
 //! * **data to model**: each sampled point of the person lies on the nearest capsule's
 //!   surface (point-to-surface distance, Huber-weighted; far points are outliers: a skirt, a
-//!   bag; optionally, points outside the trunk's skin weigh less than inside it: clothing
-//!   stands off the trunk, nothing is seen inside it);
+//!   bag);
 //! * **model to data (free space)**: the front of each capsule, sampled along its axis and
 //!   projected, must land on the person's silhouette, not where the camera sees past the
 //!   body (pulled towards the nearest person pixel), and must not float in front of the
-//!   surface the camera sees there;
+//!   surface the camera sees there (an arm's pull back bounded: seen end-on, a forearm is a
+//!   small patch easily missed sideways);
 //! * **detections**: optional targets for Kinect joints (geodesic extrema of head, hands and
 //!   feet), to start and recover without a prior pose.
 //!
@@ -43,12 +43,12 @@ pub struct FitSettings {
     /// height sets the scale at the start, and a capsule body left free to grow does (by 4 %
     /// on the rest body, where the right answer is known to be 1).
     pub scale_stiffness: f32,
-    /// Weight of a data point outside the trunk's skin relative to one inside: clothing
-    /// stands off the trunk (a T-shirt hangs straight down from the chest in front of the
-    /// belly), and a point inside the skin cannot be clothing. 1 (two-sided) by default: 0.3
-    /// took the T-shirt set's trunk error down 4-6 mm but the bare set's up 2 and the whole
-    /// set's mean and 95th percentile up (docs/STATUS.md, session 36).
-    pub outside_weight: f32,
+    /// A point of an arm's front lying on the person but in front of the surface seen there
+    /// is pulled back by at most this much, metres (Huber). Seen end-on, a forearm raised
+    /// towards the sensor is a small patch: a little off sideways, its front projects onto
+    /// the body 20-30 cm behind, and the unbounded pull (the trunk's and legs' still is)
+    /// took the arm back down to the side.
+    pub arm_front_cap_m: f32,
 }
 
 impl Default for FitSettings {
@@ -60,7 +60,7 @@ impl Default for FitSettings {
             target_weight: 200.0,
             damping: 2.0,
             scale_stiffness: 1.0e6,
-            outside_weight: 1.0,
+            arm_front_cap_m: 0.05,
         }
     }
 }
@@ -102,9 +102,8 @@ pub type Support = Vec<u32>;
 struct Layout {
     offsets: Vec<usize>,
     count: usize,
-    /// Per bone, whether it is the trunk's: the shoulder centre's bone's ancestors (spine
-    /// and pelvis).
-    trunk: Vec<bool>,
+    /// Per bone, whether it is an arm's: moved by an upper arm.
+    arm: Vec<bool>,
 }
 
 const ROOT: usize = 7;
@@ -120,17 +119,22 @@ impl Layout {
                 JointKind::Hinge { .. } => 1,
             };
         }
-        let mut trunk = vec![false; body.parents.len()];
-        let shoulders = body.kinect[KinectJoint::ShoulderCenter.index()].0;
-        let mut b = body.parents.get(shoulders).copied().flatten();
-        while let Some(x) = b {
-            trunk[x] = true;
-            b = body.parents[x];
-        }
+        // The bones an upper arm moves (the upper arm, the forearm, the hand).
+        let shoulders = [
+            body.drivers[KinectJoint::ElbowLeft.index()],
+            body.drivers[KinectJoint::ElbowRight.index()],
+        ];
+        let arm = (0..body.parents.len())
+            .map(|b| {
+                body.chains[b]
+                    .iter()
+                    .any(|&j| shoulders.contains(&body.joints[j].bone))
+            })
+            .collect();
         Self {
             offsets,
             count: at,
-            trunk,
+            arm,
         }
     }
 }
@@ -147,7 +151,7 @@ pub struct Fitter {
     /// [`CANDIDATES`] nearest found then (a point does not change limbs within a frame).
     candidates: Vec<[u8; CANDIDATES]>,
     gathered: Vec<Gathered>,
-    /// Per data point, the skin vertex it was matched to (bone, vertex; `u32::MAX`: none),
+    /// Per data point, the capsule it was matched on and its bone's skin vertex (`u32::MAX`: none),
     /// found again every [`MATCH_EVERY`] steps and followed in between.
     matches: Vec<(u32, u32)>,
     refresh_matches: bool,
@@ -299,16 +303,21 @@ impl Fitter {
             // plane (the capsule's own surface where the skin has no vertex within reach).
             let bone = body.capsules[k].bone;
             if self.refresh_matches {
-                let surface = &body.surfaces[bone];
                 let local = self.to_bone[bone].transform_point3(p);
-                let v = surface.nearest(local).unwrap_or(NO_MATCH);
-                self.matches.push((bone as u32, v));
+                let v = body.surfaces[bone].nearest(local).unwrap_or(NO_MATCH);
+                self.matches.push((k as u32, v));
             }
-            let (matched_bone, v) = self.matches.get(i).copied().unwrap_or((0, NO_MATCH));
-            let (d, normal, far) = match body.surfaces[matched_bone as usize].points.get(v as usize)
-            {
+            // Between two searches the point stays with the capsule it was matched on: its
+            // residual and its rows are that bone's (the nearest capsule may change between
+            // steps, the vertex followed is not the new one's).
+            let (k, v) = match self.matches.get(i) {
+                Some(&(matched, v)) if v != NO_MATCH => (matched as usize, v),
+                _ => (k, NO_MATCH),
+            };
+            let matched_bone = body.capsules[k].bone;
+            let (d, normal, far) = match body.surfaces[matched_bone].points.get(v as usize) {
                 Some(&at) if v != NO_MATCH => {
-                    let b = matched_bone as usize;
+                    let b = matched_bone;
                     let at = posed.frames[b].transform_point3(at);
                     let n = (posed.rotations[b] * body.surfaces[b].normals[v as usize])
                         .normalize_or_zero();
@@ -334,13 +343,6 @@ impl Fitter {
                 settings.huber_m / d.abs()
             } else {
                 1.0
-            };
-            // A point outside the trunk's skin may be clothing standing off it; inside, it
-            // cannot be.
-            let w = if d > 0.0 && layout.trunk[matched_bone as usize] {
-                w * settings.outside_weight
-            } else {
-                w
             };
             // The capsule moving by δ at p changes d by -n·δ: gathered per capsule as
             // ψ = (dir, p × dir, p · dir) with dir = -n (see `Gathered`).
@@ -398,9 +400,16 @@ impl Fitter {
                 if obs.mask[i] {
                     // On the person: the model must not float in front of the surface seen.
                     if z > 0.0 && z - s.z > 0.04 {
+                        let r = s.z - z + 0.04;
+                        let cap = settings.arm_front_cap_m;
+                        let w = if layout.arm[bone] && r.abs() > cap {
+                            cap / r.abs()
+                        } else {
+                            1.0
+                        };
                         self.row.clear();
                         self.point_row(body, layout, &posed, pivot, bone, s, Vec3::Z);
-                        self.add_row(s.z - z + 0.04, settings.free_space_weight, layout.count);
+                        self.add_row(r, settings.free_space_weight * w, layout.count);
                     }
                     continue;
                 }
