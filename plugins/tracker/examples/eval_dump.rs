@@ -9,6 +9,7 @@
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
 //!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
+//!   `START_PULLED=1`: a start pulls the arms to the hands' ends only (no hanging arms tried);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
 //!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTHING` (the
@@ -73,6 +74,9 @@ fn settings() -> TrackerSettings {
     }
     if let Some(v) = env("TURN_MARGIN") {
         s.turn_margin = v;
+    }
+    if std::env::var("START_PULLED").is_ok() {
+        s.start_arms_hanging = false;
     }
     if let Some(v) = env("ARM_FRONT_CAP") {
         s.fit.arm_front_cap_m = v;

@@ -63,6 +63,9 @@ pub struct TrackerSettings {
     /// their back to the sensor) is taken only when it explains the frame better by this
     /// ([`score`]).
     pub turn_margin: f32,
+    /// A person's first start also tries the arms hanging, not pulled to the hands' ends,
+    /// and keeps that if it explains the frame better (`tracker/start.rs`).
+    pub start_arms_hanging: bool,
     /// How the body-part forest's joint proposals are made (with a forest,
     /// [`Tracker::with_parts`]); proposals lighter than `parts_min_weight` (part probability
     /// times depth², m²) are not used.
@@ -97,6 +100,7 @@ impl Default for TrackerSettings {
             recover: true,
             carry_turn: 1.0,
             turn_margin: 0.06,
+            start_arms_hanging: true,
             parts: ProposalSettings::default(),
             parts_min_weight: 2.0,
             keep_person_s: 0.5,
@@ -598,7 +602,7 @@ impl Tracker {
                 if fit.inliers < settings.min_inliers || fit.outside > settings.max_outside {
                     let away = self.faces_away(&pose);
                     let support = self.fitter.support.clone();
-                    let (fresh, fresh_fit) = self.start(frame, &person, away);
+                    let (fresh, fresh_fit) = self.start(frame, &person, away, false);
                     started = true;
                     self.previous = None;
                     if score(&fresh_fit) > score(&fit) {
@@ -614,7 +618,7 @@ impl Tracker {
             }
             None => {
                 started = true;
-                self.start(frame, &person, false)
+                self.start(frame, &person, false, true)
             }
         };
         if !pose.is_finite() {

@@ -1,7 +1,8 @@
 //! Starting from nothing, and which way the person faces. A start places the body standing
 //! under the person, sized by their height, pulls it to the geodesic extrema and fits it to
 //! the depth alone, twice: facing the sensor and with its back to it (the person may have
-//! turned while no one was tracked: a dancer's spin). Which of the two is kept leans to the
+//! turned while no one was tracked: a dancer's spin); a person's first start also tries the
+//! arms hanging, not pulled to the hands' ends. Which of the two is kept leans to the
 //! way the person last faced, since a trunk seen from the front or the back differs in the
 //! depth by little more than the sensor's steps at 3 m; a followed fit carries on the turn the
 //! body was making ([`carry_turn`]).
@@ -21,12 +22,14 @@ impl Tracker {
     /// Starts from nothing: the body standing under the person, sized by their height,
     /// pulled to the geodesic extrema, then fitted to the depth alone; facing the way
     /// `prior_away` says unless the other way explains the frame better by
-    /// [`super::TrackerSettings::turn_margin`].
+    /// [`super::TrackerSettings::turn_margin`]. `first`: no pose to follow (a person's first
+    /// frame), not a restart.
     pub(super) fn start(
         &mut self,
         frame: &DepthFrame,
         person: &Segmentation,
         prior_away: bool,
+        first: bool,
     ) -> (Pose, FitStats) {
         self.starts += 1;
         let floor = person.floor;
@@ -100,13 +103,38 @@ impl Tracker {
         let support = self.fitter.support.clone();
         let (other, other_fit) =
             self.start_facing(frame, person, spot, scale, &targets, !prior_away);
-        if score(&other_fit) > score(&fit) + self.settings.turn_margin {
-            (other, other_fit)
-        } else {
-            // The kept fit's evidence per capsule (the joints' confidences) is its own.
-            self.fitter.support = support;
-            (pose, fit)
+        let (away, pose, fit, support) =
+            if score(&other_fit) > score(&fit) + self.settings.turn_margin {
+                let support = self.fitter.support.clone();
+                (!prior_away, other, other_fit, support)
+            } else {
+                (prior_away, pose, fit, support)
+            };
+        // A person's first start, the same way round with the arms hanging, not pulled to
+        // the hands' ends: a hand resting beside the hip is no end, and the end taken for it
+        // (an elbow, a hip) pulls the arm into the trunk and the trunk askew with it. Not in
+        // a restart, which comes mid-motion (a dancer's hands on the floor are ends).
+        if self.settings.start_arms_hanging && first {
+            let hands = [
+                KinectJoint::HandLeft.index(),
+                KinectJoint::HandRight.index(),
+            ];
+            let no_hands: Vec<(usize, Vec3, f32)> = targets
+                .iter()
+                .copied()
+                .filter(|t| !hands.contains(&t.0))
+                .collect();
+            if no_hands.len() < targets.len() {
+                let (hanging, hanging_fit) =
+                    self.start_facing(frame, person, spot, scale, &no_hands, away);
+                if score(&hanging_fit) > score(&fit) {
+                    return (hanging, hanging_fit);
+                }
+            }
         }
+        // The kept fit's evidence per capsule (the joints' confidences) is its own.
+        self.fitter.support = support;
+        (pose, fit)
     }
 
     /// The body standing at `spot`, facing the sensor or `away` from it, pulled to `targets`
