@@ -469,6 +469,10 @@ pub struct RunFrame {
     pub frame: usize,
     pub time_s: f64,
     pub joints: Vec<fitroom_tracker::TrackedJointOut>,
+    /// Whether the fit (re)started from the extrema in this frame.
+    pub started: bool,
+    /// How many times the tracker has changed its body's build or size so far.
+    pub body_changes: u32,
 }
 
 fn track_run(dump: &Path, body: &BodyArg) -> Result<RunReport> {
@@ -479,14 +483,16 @@ fn track_run(dump: &Path, body: &BodyArg) -> Result<RunReport> {
         let frame = recording
             .read_depth(entry, DepthCamera::default())
             .with_context(|| format!("{}: frame {i}", dump.display()))?;
-        let joints = tracker
-            .track(&frame)
-            .map(|t| t.joints.to_vec())
-            .unwrap_or_default();
+        let tracked = tracker.track(&frame);
         frames.push(RunFrame {
             frame: i,
             time_s: frame.time_s,
-            joints,
+            joints: tracked
+                .as_ref()
+                .map(|t| t.joints.to_vec())
+                .unwrap_or_default(),
+            started: tracked.as_ref().is_some_and(|t| t.started),
+            body_changes: tracked.as_ref().map_or(0, |t| t.body_changes),
         });
     }
     Ok(RunReport {

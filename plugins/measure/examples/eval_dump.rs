@@ -1,7 +1,6 @@
 //! Development loop for the tracker, without building the app: one recording with ground
-//! truth, the evaluation as JSON (as `fitroom track eval --json` gives, but with the tracker's
-//! own search for the build: the app gives it the measurement's fit, `fitroom_measure`), and
-//! on request:
+//! truth, the evaluation as JSON (as `fitroom track eval --json` gives: the person's build
+//! from the measurement's body fit), and on request:
 //!
 //! * `VERBOSE=1`: per frame, whether the fit (re)started, its statistics and each joint's error;
 //! * `SIGNED=1`: each joint's mean signed error (a bias shows here, not in the mean distance);
@@ -9,6 +8,8 @@
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
 //!   them costs); `FIXED=1`: the default body throughout (no estimate of the build);
+//!   `OWN_SEARCH=1`: the build from the tracker's own macro search (the tracker crate alone,
+//!   without the measurement's fit);
 //!   `START_PULLED=1`: a start pulls the arms to the hands' ends only (no hanging arms tried);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
@@ -16,12 +17,12 @@
 //!   clothing layer tried, metres; 0: none): override the settings; `INFLATE=T`: the given
 //!   `SHAPE` in a clothing layer T metres thick;
 //! * `PARTS=F.forest`: a body-part forest's joint proposals as one more hypothesis for a
-//!   limb suspected lost (grow one with the `parts` example).
+//!   limb suspected lost (grow one with the tracker's `parts` example).
 //!
 //! CPU time per frame (this thread's, from `/proc/thread-self/schedstat`: this host's wall
 //! time is noisier) goes to stderr.
 //!
-//! `cargo run -p fitroom_tracker --no-default-features --release --example eval_dump -- DIR`
+//! `cargo run -p fitroom_measure --no-default-features --release --example eval_dump -- DIR`
 
 use std::path::{Path, PathBuf};
 
@@ -75,11 +76,11 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("TURN_MARGIN") {
         s.turn_margin = v;
     }
-    if std::env::var("START_PULLED").is_ok() {
-        s.start_arms_hanging = false;
-    }
     if let Some(v) = env("ARM_FRONT_CAP") {
         s.fit.arm_front_cap_m = v;
+    }
+    if std::env::var("START_PULLED").is_ok() {
+        s.start_arms_hanging = false;
     }
     if let Some(v) = env("CLOTHING") {
         s.clothing_m = v;
@@ -113,8 +114,13 @@ fn main() -> Result<(), Error> {
             body.clothe(t);
         }
         Tracker::new(body, settings())
-    } else {
+    } else if std::env::var("OWN_SEARCH").is_ok() {
         Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?
+    } else {
+        let prior = std::sync::Arc::new(fitroom_measure::ShapePrior::shipped()?);
+        Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?.with_build_fit(
+            std::sync::Arc::new(fitroom_measure::build::TrackedBuild::new(prior)),
+        )
     };
     if let Ok(path) = std::env::var("PARTS") {
         let forest = fitroom_tracker::bodyparts::Forest::read(&mut std::fs::File::open(path)?)?;
