@@ -2,7 +2,7 @@
 //! under the person, sized by their height, pulls it to the geodesic extrema and fits it to
 //! the depth alone, twice: facing the sensor and with its back to it (the person may have
 //! turned while no one was tracked: a dancer's spin); a person's first start also tries the
-//! arms hanging, not pulled to the hands' ends. Which of the two is kept leans to the
+//! arms hanging, not pulled to the hands' ends. Which way round is kept leans to the
 //! way the person last faced, since a trunk seen from the front or the back differs in the
 //! depth by little more than the sensor's steps at 3 m; a followed fit carries on the turn the
 //! body was making ([`carry_turn`]).
