@@ -277,9 +277,11 @@ fn stature_after_a_crouch_cm(
 }
 
 /// A man first seen crouching (a jump's start) is started on a body sized to the crouch, and
-/// the build fitted to those first frames keeps him short for good (the acceptance set's
+/// the build fitted to those first frames kept him short for good (the acceptance set's
 /// T-shirt recordings of CMU 02_04 and 13_39: 175.5 cm men measured 157-162 cm); the second
-/// look, from frames of him standing, gives his stature.
+/// look, from frames of him standing, gives his stature. (Until session 42 the first look alone
+/// was 7-8 cm short with both noise seeds; since a data point's rows stay with the capsule it
+/// was matched on, it is right with one of them and 32 cm short with the other.)
 #[test]
 fn a_man_first_seen_crouching_is_given_his_standing_stature() {
     let model = model();
@@ -290,6 +292,7 @@ fn a_man_first_seen_crouching_is_given_his_standing_stature() {
         ..Shape::default()
     };
     let truth = stature_cm(&model, &shape);
+    let mut gain = f32::NEG_INFINITY;
     for seed in [300, 500] {
         let first = stature_after_a_crouch_cm(&model, &shape, seed, 1);
         let second = stature_after_a_crouch_cm(&model, &shape, seed, 2);
@@ -298,9 +301,10 @@ fn a_man_first_seen_crouching_is_given_his_standing_stature() {
             (second - truth).abs() < 3.0,
             "seed {seed}: the second look's stature {second:.1} cm, true {truth:.1}"
         );
-        assert!(
-            (first - truth).abs() > (second - truth).abs() + 3.0,
-            "seed {seed}: the first look alone {first:.1} cm, the second {second:.1}, true {truth:.1}"
-        );
+        gain = gain.max((first - truth).abs() - (second - truth).abs());
     }
+    assert!(
+        gain > 3.0,
+        "the first look alone is no worse than both ({gain:.1} cm)"
+    );
 }
