@@ -12,8 +12,8 @@ use glam::Vec3;
 /// The arms hanging, then the left forearm raised forwards, towards the sensor, by `step_deg`
 /// a frame (a walk's or a run's arm swing: CMU 02_01's forearms come up 8-10° a frame at 30
 /// Hz) until it points at the sensor, the elbow going back 20° with it (as in a run), then
-/// held; the person `z` metres away. The mean error (m) of the left elbow, wrist and hand over the frames from
-/// the start of the raise on, with the fit's `arm_front_cap_m` as given.
+/// held; the person `z` metres away. The mean error (m) of the left elbow, wrist and hand
+/// over the frames from the start of the raise on, with the fit's `arm_front_cap_m` as given.
 fn forearm_raised_towards_the_sensor(
     arm_front_cap_m: f32,
     step_deg: f32,
