@@ -221,8 +221,9 @@ pub const BONE_MAP: &[(&str, KinectJoint)] = &[
     ("spine_01", KinectJoint::Spine),
     ("spine_02", KinectJoint::ShoulderCenter),
     ("spine_03", KinectJoint::ShoulderCenter),
+    // The head keeps its rest turn on the neck (the Kinect has no head orientation): aimed
+    // along the neck too, it nodded 8° forwards of the body's rest, on every frame.
     ("neck_01", KinectJoint::Head),
-    ("head", KinectJoint::Head),
     ("clavicle_l", KinectJoint::ShoulderLeft),
     ("upperarm_l", KinectJoint::ElbowLeft),
     ("hand_l", KinectJoint::HandLeft),

@@ -35,6 +35,7 @@ const LIMBS: &[(&str, Option<&str>, K, K)] = &[
     ("calf_r", Some("foot_r"), K::KneeRight, K::AnkleRight),
     ("spine_01", Some("spine_02"), K::HipCenter, K::Spine),
     ("spine_03", None, K::Spine, K::ShoulderCenter),
+    ("neck_01", None, K::ShoulderCenter, K::Head),
 ];
 
 #[test]
@@ -109,6 +110,33 @@ fn limb_bones_follow_the_source_limbs_on_every_clip() {
         "worst mean deviation: {:.3}° ({})",
         worst_overall.0, worst_overall.1
     );
+}
+
+/// The Kinect gives the head a position, not an orientation: the avatar's head keeps its rest
+/// turn on the neck, which follows the sensor's neck. (Aimed along the neck as well, the head
+/// nodded 8° forwards of the body's rest on every frame, and the depth tracker, whose head
+/// keeps its rest turn, leant its neck forwards to match: its head joint 30-40 mm off.)
+#[test]
+fn the_head_keeps_its_rest_turn_on_the_neck() {
+    let model = common::body();
+    let rest = model.rest_pose(&model.positions);
+    let skeleton = fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton");
+    let mut retargeter = Retargeter::new(skeleton, RetargetOptions::default()).expect("retargeter");
+    let head = retargeter.skeleton().index_of("head").expect("bone");
+    let rest_turn = retargeter.skeleton().bones[head].rest_local_rotation;
+    for file in ["07_01.bvh", "141_16.bvh"] {
+        let clip = BvhClip::load(fitroom_testdata::clip_path(file)).expect("clip");
+        let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
+        for frame in source.advance(2.0).expect("frames") {
+            let pose = retargeter.update(&frame);
+            let turn = pose.local_rotations[head];
+            assert!(
+                turn.angle_between(rest_turn).to_degrees() < 0.5,
+                "{file}: the head turned {:.2}° on the neck",
+                turn.angle_between(rest_turn).to_degrees()
+            );
+        }
+    }
 }
 
 #[test]
