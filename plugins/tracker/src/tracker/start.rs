@@ -113,8 +113,9 @@ impl Tracker {
         // A person's first start, the same way round with the arms hanging, not pulled to
         // the hands' ends: a hand resting beside the hip is no end, and the end taken for it
         // (an elbow, a hip) pulls the arm into the trunk and the trunk askew with it. Not in
-        // a restart, which comes mid-motion (a dancer's hands on the floor are ends).
-        if self.settings.start_arms_hanging && first {
+        // a restart, which comes mid-motion (a dancer's hands on the floor are ends), nor
+        // with a hand on top (arms raised: the arms hanging took the hands for the head).
+        if self.settings.start_arms_hanging && first && !hand_on_top {
             let hands = [
                 KinectJoint::HandLeft.index(),
                 KinectJoint::HandRight.index(),
