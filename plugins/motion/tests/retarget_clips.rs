@@ -38,11 +38,22 @@ const LIMBS: &[(&str, Option<&str>, K, K)] = &[
     ("neck_01", None, K::ShoulderCenter, K::Head),
 ];
 
-#[test]
-fn limb_bones_follow_the_source_limbs_on_every_clip() {
+/// A retargeter onto the shipped body.
+fn retargeter() -> Retargeter {
     let model = common::body();
     let rest = model.rest_pose(&model.positions);
     let skeleton = fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton");
+    Retargeter::new(skeleton, RetargetOptions::default()).expect("retargeter")
+}
+
+/// The shared CMU clip `file` as a sensor source.
+fn source(file: &str) -> BvhSource {
+    let clip = BvhClip::load(fitroom_testdata::clip_path(file)).expect("clip parses");
+    BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source")
+}
+
+#[test]
+fn limb_bones_follow_the_source_limbs_on_every_clip() {
     let mut worst_overall = (0.0f32, String::new());
     let index = common::cmu_index();
     assert_eq!(index.len(), 15);
@@ -51,10 +62,8 @@ fn limb_bones_follow_the_source_limbs_on_every_clip() {
         "clip", "frames", "mean max°"
     );
     for file in index {
-        let clip = BvhClip::load(fitroom_testdata::clip_path(&file)).expect("clip parses");
-        let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
-        let mut retargeter =
-            Retargeter::new(skeleton.clone(), RetargetOptions::default()).expect("retargeter");
+        let mut source = source(&file);
+        let mut retargeter = retargeter();
         // Whole clip, in steps (one call emits at most a few seconds of frames).
         let mut frames = Vec::new();
         let duration = source.clip_duration_s();
@@ -118,22 +127,18 @@ fn limb_bones_follow_the_source_limbs_on_every_clip() {
 /// keeps its rest turn, leant its neck forwards to match: its head joint 30-40 mm off.)
 #[test]
 fn the_head_keeps_its_rest_turn_on_the_neck() {
-    let model = common::body();
-    let rest = model.rest_pose(&model.positions);
-    let skeleton = fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton");
-    let mut retargeter = Retargeter::new(skeleton, RetargetOptions::default()).expect("retargeter");
+    let mut retargeter = retargeter();
     let head = retargeter.skeleton().index_of("head").expect("bone");
     let rest_turn = retargeter.skeleton().bones[head].rest_local_rotation;
     for file in ["07_01.bvh", "141_16.bvh"] {
-        let clip = BvhClip::load(fitroom_testdata::clip_path(file)).expect("clip");
-        let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
-        for frame in source.advance(2.0).expect("frames") {
+        for frame in source(file).advance(2.0).expect("frames") {
             let pose = retargeter.update(&frame);
-            let turn = pose.local_rotations[head];
+            let turned = pose.local_rotations[head]
+                .angle_between(rest_turn)
+                .to_degrees();
             assert!(
-                turn.angle_between(rest_turn).to_degrees() < 0.5,
-                "{file}: the head turned {:.2}° on the neck",
-                turn.angle_between(rest_turn).to_degrees()
+                turned < 0.5,
+                "{file}: the head turned {turned:.2}° on the neck"
             );
         }
     }
@@ -141,13 +146,8 @@ fn the_head_keeps_its_rest_turn_on_the_neck() {
 
 #[test]
 fn low_confidence_joints_keep_their_last_good_orientation() {
-    let model = common::body();
-    let rest = model.rest_pose(&model.positions);
-    let skeleton = fitroom_motion::avatar_skeleton(&model, &rest).expect("skeleton");
-    let mut retargeter = Retargeter::new(skeleton, RetargetOptions::default()).expect("retargeter");
-    let clip = BvhClip::load(fitroom_testdata::clip_path("141_16.bvh")).expect("clip");
-    let mut source = BvhSource::from_clip(clip, BvhSourceOptions::default()).expect("source");
-    let frames = source.advance(2.0).expect("frames");
+    let mut retargeter = retargeter();
+    let frames = source("141_16.bvh").advance(2.0).expect("frames");
     let elbow = retargeter.skeleton().index_of("upperarm_r").expect("bone");
     let held = retargeter.update(&frames[10]).rotations[elbow];
     // The waving arm moves, but the sensor now reports it as inferred or garbage.
