@@ -14,7 +14,9 @@
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
 //!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTHING` (the
-//!   clothing layer tried, metres; 0: none): override the settings; `INFLATE=T`: the given
+//!   clothing layer tried, metres; 0: none), `TURN_CHECK` (frames between checks of a body
+//!   turned away; 0: none): override the settings; `FOLDED_AT_REST=1`: a folded arm also tried
+//!   at rest; `INFLATE=T`: the given
 //!   `SHAPE` in a clothing layer T metres thick;
 //! * `PARTS=F.forest`: a body-part forest's joint proposals as one more hypothesis for a
 //!   limb suspected lost (grow one with the tracker's `parts` example).
@@ -85,6 +87,10 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("CLOTHING") {
         s.clothing_m = v;
     }
+    if let Some(v) = env("TURN_CHECK") {
+        s.turn_check_every = v as usize;
+    }
+    s.recover_folded_at_rest = std::env::var("FOLDED_AT_REST").is_ok();
     if let Some(v) = env("PMINW") {
         s.parts_min_weight = v;
     }

@@ -87,6 +87,9 @@ enum Hypothesis {
     Proposed,
     /// An arm with its forearm bent forward and its hand pulled to a point before the body.
     Held(Vec3),
+    /// An arm at rest, pulled nowhere (tried for an arm folded up on itself, with
+    /// [`super::TrackerSettings::recover_folded_at_rest`]).
+    Rest,
 }
 
 /// A limb with fewer data points on its upper and lower bones than this is suspected lost.
@@ -103,7 +106,7 @@ const BETTER_BY: f32 = 0.01;
 
 impl Tracker {
     /// The limbs suspected lost in the fit of `pose` (the fitter's support is that fit's).
-    fn suspects(&mut self, pose: &Pose, fit: &FitStats) -> Vec<Vec<Limb>> {
+    fn suspects(&mut self, pose: &Pose, fit: &FitStats) -> Vec<(Vec<Limb>, bool)> {
         self.body.pose_into(pose, &mut self.posed);
         let joints = self.body.kinect_joints(&self.posed);
         let at = |j: KinectJoint| joints[j.index()];
@@ -114,7 +117,7 @@ impl Tracker {
         if side(KinectJoint::KneeLeft, KinectJoint::KneeRight) < -CROSSED_M
             || side(KinectJoint::AnkleLeft, KinectJoint::AnkleRight) < -CROSSED_M
         {
-            out.push(vec![Limb::LegLeft, Limb::LegRight]);
+            out.push((vec![Limb::LegLeft, Limb::LegRight], false));
         }
         let support = self.bone_support();
         // An arm folded up on itself: a forearm the fit lost (its points taken by the trunk,
@@ -136,9 +139,9 @@ impl Tracker {
             // A part of the person left unexplained: any limb may be the one missing there.
             let unexplained = fit.outliers > MAX_OUTLIERS;
             if (seen < MIN_LIMB_SUPPORT || unexplained || folded(limb))
-                && !out.iter().any(|s: &Vec<Limb>| s.contains(&limb))
+                && !out.iter().any(|(s, _)| s.contains(&limb))
             {
-                out.push(vec![limb]);
+                out.push((vec![limb], folded(limb)));
             }
         }
         out
@@ -171,10 +174,13 @@ impl Tracker {
                 .iter()
                 .any(|j| self.proposals.iter().any(|p| p.joint == j.index()))
         };
-        for limbs in suspects {
+        for (limbs, folded) in suspects {
             if let [limb] = limbs[..] {
                 if limb.shoulder().is_some() {
                     tries.push((vec![limb], Hypothesis::Bent));
+                    if self.settings.recover_folded_at_rest && folded {
+                        tries.push((vec![limb], Hypothesis::Rest));
+                    }
                 }
                 if proposed(limb) {
                     tries.push((vec![limb], Hypothesis::Proposed));
@@ -223,6 +229,8 @@ impl Tracker {
                     {
                         candidate.local[forearm] = Quat::from_axis_angle(axis, FRAC_PI_2);
                     }
+                } else if how == Hypothesis::Rest {
+                    // At rest, pulled nowhere: the fit alone places it.
                 } else if let Some(e) = ends.iter().find(|e| e.part == limb.end()) {
                     targets.push((limb.end_joint().index(), e.joint, 1.0));
                 }

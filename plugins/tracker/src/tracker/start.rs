@@ -5,7 +5,8 @@
 //! arms hanging, not pulled to the hands' ends. Which way round is kept leans to the
 //! way the person last faced, since a trunk seen from the front or the back differs in the
 //! depth by little more than the sensor's steps at 3 m; a followed fit carries on the turn the
-//! body was making ([`carry_turn`]).
+//! body was making ([`carry_turn`]), and one with its back to the sensor is checked now and
+//! then against a start facing it ([`Tracker::check_turn`]).
 
 use fitroom_depth::DepthFrame;
 use fitroom_sensor::KinectJoint;
@@ -31,7 +32,55 @@ impl Tracker {
         prior_away: bool,
         first: bool,
     ) -> (Pose, FitStats) {
-        self.starts += 1;
+        let StartFrom {
+            spot,
+            scale,
+            targets,
+            hand_on_top,
+        } = self.start_from(frame, person);
+        // Facing the sensor, and facing away (the extrema's left and right swapped): a
+        // person who turned their back while no one was tracked is found so as well.
+        let (pose, fit) = self.start_facing(frame, person, spot, scale, &targets, prior_away);
+        let support = self.fitter.support.clone();
+        let (other, other_fit) =
+            self.start_facing(frame, person, spot, scale, &targets, !prior_away);
+        let (away, pose, fit, support) =
+            if score(&other_fit) > score(&fit) + self.settings.turn_margin {
+                let support = self.fitter.support.clone();
+                (!prior_away, other, other_fit, support)
+            } else {
+                (prior_away, pose, fit, support)
+            };
+        // A person's first start, the same way round with the arms hanging, not pulled to
+        // the hands' ends: a hand resting beside the hip is no end, and the end taken for it
+        // (an elbow, a hip) pulls the arm into the trunk and the trunk askew with it. Not in
+        // a restart, which comes mid-motion (a dancer's hands on the floor are ends), nor
+        // with a hand on top (arms raised: the arms hanging took the hands for the head).
+        if self.settings.start_arms_hanging && first && !hand_on_top {
+            let hands = [
+                KinectJoint::HandLeft.index(),
+                KinectJoint::HandRight.index(),
+            ];
+            let no_hands: Vec<(usize, Vec3, f32)> = targets
+                .iter()
+                .copied()
+                .filter(|t| !hands.contains(&t.0))
+                .collect();
+            if no_hands.len() < targets.len() {
+                let (hanging, hanging_fit) =
+                    self.start_facing(frame, person, spot, scale, &no_hands, away);
+                if score(&hanging_fit) > score(&fit) {
+                    return (hanging, hanging_fit);
+                }
+            }
+        }
+        // The kept fit's evidence per capsule (the joints' confidences) is its own.
+        self.fitter.support = support;
+        (pose, fit)
+    }
+
+    /// Where a start places the body, at what size, and the extrema it pulls it to.
+    fn start_from(&mut self, frame: &DepthFrame, person: &Segmentation) -> StartFrom {
         let floor = person.floor;
         let ends = geodesic_extrema(frame, person);
         // A hand is the top of what is seen: raised.
@@ -98,44 +147,44 @@ impl Tracker {
             .collect();
         // Facing the sensor, and facing away (the extrema's left and right swapped): a
         // person who turned their back while no one was tracked is found so as well.
-        let spot = spot(scale);
-        let (pose, fit) = self.start_facing(frame, person, spot, scale, &targets, prior_away);
-        let support = self.fitter.support.clone();
-        let (other, other_fit) =
-            self.start_facing(frame, person, spot, scale, &targets, !prior_away);
-        let (away, pose, fit, support) =
-            if score(&other_fit) > score(&fit) + self.settings.turn_margin {
-                let support = self.fitter.support.clone();
-                (!prior_away, other, other_fit, support)
-            } else {
-                (prior_away, pose, fit, support)
-            };
-        // A person's first start, the same way round with the arms hanging, not pulled to
-        // the hands' ends: a hand resting beside the hip is no end, and the end taken for it
-        // (an elbow, a hip) pulls the arm into the trunk and the trunk askew with it. Not in
-        // a restart, which comes mid-motion (a dancer's hands on the floor are ends), nor
-        // with a hand on top (arms raised: the arms hanging took the hands for the head).
-        if self.settings.start_arms_hanging && first && !hand_on_top {
-            let hands = [
-                KinectJoint::HandLeft.index(),
-                KinectJoint::HandRight.index(),
-            ];
-            let no_hands: Vec<(usize, Vec3, f32)> = targets
-                .iter()
-                .copied()
-                .filter(|t| !hands.contains(&t.0))
-                .collect();
-            if no_hands.len() < targets.len() {
-                let (hanging, hanging_fit) =
-                    self.start_facing(frame, person, spot, scale, &no_hands, away);
-                if score(&hanging_fit) > score(&fit) {
-                    return (hanging, hanging_fit);
-                }
-            }
+        StartFrom {
+            spot: spot(scale),
+            scale,
+            targets,
+            hand_on_top,
         }
-        // The kept fit's evidence per capsule (the joints' confidences) is its own.
-        self.fitter.support = support;
-        (pose, fit)
+    }
+
+    /// A body followed with its back to the sensor, checked: a start facing the sensor is
+    /// fitted to the frame and kept if it explains it better by [`TURN_CHECK_MARGIN`]. A
+    /// person at a mirror faces it; a followed fit turned the wrong way round explains the
+    /// depth almost as well as the right one (a trunk's front and back differ by little
+    /// more than the sensor's steps at 3 m), so without this it is followed for as long as
+    /// the person stays. Returns whether the start was kept.
+    pub(super) fn check_turn(
+        &mut self,
+        frame: &DepthFrame,
+        person: &Segmentation,
+        pose: &mut Pose,
+        fit: &mut FitStats,
+    ) -> bool {
+        let start = self.start_from(frame, person);
+        let support = self.fitter.support.clone();
+        let (facing, facing_fit) = self.start_facing(
+            frame,
+            person,
+            start.spot,
+            start.scale,
+            &start.targets,
+            false,
+        );
+        if facing.is_finite() && score(&facing_fit) > score(fit) + TURN_CHECK_MARGIN {
+            (*pose, *fit) = (facing, facing_fit);
+            true
+        } else {
+            self.fitter.support = support;
+            false
+        }
     }
 
     /// The body standing at `spot`, facing the sensor or `away` from it, pulled to `targets`
@@ -173,6 +222,21 @@ impl Tracker {
         facing_degrees(&self.body.kinect_joints(&self.posed)).abs() > 90.0
     }
 }
+
+/// What [`Tracker::start_from`] finds.
+struct StartFrom {
+    /// Under the person's centroid, on the floor.
+    spot: Vec3,
+    scale: f32,
+    /// The extrema as targets, named as for a body facing the sensor.
+    targets: Vec<(usize, Vec3, f32)>,
+    /// A hand is the top of what is seen.
+    hand_on_top: bool,
+}
+
+/// A start facing the sensor replaces a followed fit with its back to it when it explains
+/// the frame better by this ([`score`]).
+const TURN_CHECK_MARGIN: f32 = 0.01;
 
 /// A turn smaller than this between two frames (degrees) is the fit's jitter as often as the
 /// person's turn, and is not carried on.
