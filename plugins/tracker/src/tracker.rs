@@ -87,8 +87,8 @@ pub struct TrackerSettings {
     pub turn_check_every: usize,
     /// An arm suspected lost because it is folded up on itself is also tried at rest,
     /// pulled nowhere ([`recover`]). Off: on the acceptance sets (session 44) the means
-    /// gained 1.3 mm on both noises, the T-shirt's lost arms most, but as many recordings
-    /// lost as gained, and no rendered case was found where it alone finds the arm.
+    /// gained 1.6-2.0 mm on both noises, the T-shirt's lost arms most, but as many
+    /// recordings lost as gained, and no rendered case was found where it alone finds the arm.
     pub recover_folded_at_rest: bool,
 }
 
