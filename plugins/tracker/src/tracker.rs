@@ -261,7 +261,7 @@ pub struct Tracker {
     corrections: [Quat; KinectJoint::COUNT],
     /// How many times the fit was (re)started.
     pub starts: usize,
-    /// Frames followed since the last start or recheck.
+    /// Frames followed since the last start or turn check.
     followed: usize,
     /// How many times a lost limb was found again ([`recover`]), and that search's fitter.
     pub recoveries: usize,
@@ -617,8 +617,6 @@ impl Tracker {
                     let away = self.faces_away(&pose);
                     let support = self.fitter.support.clone();
                     let (fresh, fresh_fit) = self.start(frame, &person, away, false);
-                    self.starts += 1;
-                    self.followed = 0;
                     started = true;
                     self.previous = None;
                     if score(&fresh_fit) > score(&fit) {
@@ -646,8 +644,6 @@ impl Tracker {
             }
             None => {
                 started = true;
-                self.starts += 1;
-                self.followed = 0;
                 self.start(frame, &person, false, true)
             }
         };

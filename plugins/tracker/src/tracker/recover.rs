@@ -105,7 +105,8 @@ const FOLDED_RAD: f32 = 100.0 * std::f32::consts::PI / 180.0;
 const BETTER_BY: f32 = 0.01;
 
 impl Tracker {
-    /// The limbs suspected lost in the fit of `pose` (the fitter's support is that fit's).
+    /// The limbs suspected lost in the fit of `pose` (the fitter's support is that fit's),
+    /// each with whether it is an arm folded up on itself.
     fn suspects(&mut self, pose: &Pose, fit: &FitStats) -> Vec<(Vec<Limb>, bool)> {
         self.body.pose_into(pose, &mut self.posed);
         let joints = self.body.kinect_joints(&self.posed);
@@ -138,10 +139,11 @@ impl Tracker {
                 .sum();
             // A part of the person left unexplained: any limb may be the one missing there.
             let unexplained = fit.outliers > MAX_OUTLIERS;
-            if (seen < MIN_LIMB_SUPPORT || unexplained || folded(limb))
+            let folded = folded(limb);
+            if (seen < MIN_LIMB_SUPPORT || unexplained || folded)
                 && !out.iter().any(|(s, _)| s.contains(&limb))
             {
-                out.push((vec![limb], folded(limb)));
+                out.push((vec![limb], folded));
             }
         }
         out

@@ -32,6 +32,8 @@ impl Tracker {
         prior_away: bool,
         first: bool,
     ) -> (Pose, FitStats) {
+        self.starts += 1;
+        self.followed = 0;
         let StartFrom {
             spot,
             scale,
@@ -145,8 +147,6 @@ impl Tracker {
                 Some((joint.index(), e.joint, 1.0))
             })
             .collect();
-        // Facing the sensor, and facing away (the extrema's left and right swapped): a
-        // person who turned their back while no one was tracked is found so as well.
         StartFrom {
             spot: spot(scale),
             scale,
