@@ -4,6 +4,7 @@
 //!
 //! * `VERBOSE=1`: per frame, whether the fit (re)started, its statistics and each joint's error;
 //! * `SIGNED=1`: each joint's mean signed error (a bias shows here, not in the mean distance);
+//! * `SAVE_SHAPE=F.ron`: the estimated build written out;
 //! * `PPM_FRAME=N`: frame N as a picture (`/tmp/frame.ppm`: depth, the person, the true and
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
@@ -13,7 +14,7 @@
 //!   `START_PULLED=1`: a start pulls the arms to the hands' ends only (no hanging arms tried);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
-//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTHING` (the
+//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
 //!   clothing layer tried, metres; 0: none), `TURN_CHECK` (frames between checks of a body
 //!   turned away; 0: none): override the settings; `FOLDED_AT_REST=1`: a folded arm also tried
 //!   at rest; `INFLATE=T`: the given
@@ -81,6 +82,12 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("ARM_FRONT_CAP") {
         s.fit.arm_front_cap_m = v;
     }
+    if let Some(v) = env("CLOTH_GAP") {
+        s.fit.cloth_gap_weight = v;
+    }
+    if let Some(v) = env("CLOTH_MARGIN") {
+        s.clothing_margin = v;
+    }
     if std::env::var("START_PULLED").is_ok() {
         s.start_arms_hanging = false;
     }
@@ -124,9 +131,18 @@ fn main() -> Result<(), Error> {
         Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?
     } else {
         let prior = std::sync::Arc::new(fitroom_measure::ShapePrior::shipped()?);
-        Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?.with_build_fit(
-            std::sync::Arc::new(fitroom_measure::build::TrackedBuild::new(prior)),
-        )
+        let mut build = fitroom_measure::build::TrackedBuild::new(prior);
+        if let Some(v) = env("UNDER_LAYER") {
+            build.under_layer = v;
+        }
+        if let Some(v) = env("UNDER_PRIOR") {
+            build.under_prior = v;
+        }
+        if let Some(v) = env("UNDER_OUTSIDE") {
+            build.under_outside_weight = v;
+        }
+        Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?
+            .with_build_fit(std::sync::Arc::new(build))
     };
     if let Ok(path) = std::env::var("PARTS") {
         let forest = fitroom_tracker::bodyparts::Forest::read(&mut std::fs::File::open(path)?)?;
@@ -205,6 +221,10 @@ fn main() -> Result<(), Error> {
             e.evaluations,
             e.clothing_m * 100.0
         );
+        if let Ok(path) = std::env::var("SAVE_SHAPE") {
+            let text = ron::ser::to_string_pretty(&e.shape, ron::ser::PrettyConfig::default())?;
+            std::fs::write(path, text)?;
+        }
     }
     if std::env::var("SIGNED").is_ok() {
         for (k, (sum, n)) in signed.iter().enumerate() {

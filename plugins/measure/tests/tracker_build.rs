@@ -204,7 +204,7 @@ fn the_body_fit_under_a_layer_of_clothing_finds_the_body_under_it() {
     for seed in [51, 71] {
         let kept = clothed_snapshots(&model, &shape, 0.03, seed);
         let off = |t: f32| -> f32 {
-            let found = fit.fit(&model, &kept, t).expect("a build");
+            let found = fit.fit(&model, &kept, t).expect("a build").shape;
             let g = girths(&found);
             println!("seed {seed}, layer {t}: bust, waist, hip {g:?} cm; true {truth:?}");
             g.iter()

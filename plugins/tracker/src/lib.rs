@@ -30,5 +30,5 @@ pub use fit::{FitSettings, FitStats};
 pub use floor::Plane;
 pub use model::{ModelError, Pose, TrackBody};
 pub use segment::{SegmentSettings, Segmentation, Segmenter};
-pub use shape::{BuildFit, Estimate, ShapeSettings, Snapshot};
+pub use shape::{BuildFit, BuildFitted, Estimate, ShapeSettings, Snapshot};
 pub use tracker::{Confidence, Tracked, TrackedJointOut, Tracker, TrackerSettings};

@@ -135,6 +135,8 @@ pub struct TrackBody {
     pub root: usize,
     /// The bones a shirt covers ([`CLOTHED_BONES`]), for [`TrackBody::clothe`].
     pub clothed: Vec<usize>,
+    /// The clothing layer [`TrackBody::clothe`] put on, metres (0: bare).
+    pub layer_m: f32,
     /// Sole to the top of the head, metres.
     pub height_m: f32,
     /// The lowest body vertex's model-space height (the soles).
@@ -187,6 +189,7 @@ impl TrackBody {
         if t <= 0.0 {
             return;
         }
+        self.layer_m += t;
         for &b in &self.clothed {
             if let Some(s) = self.surfaces.get(b) {
                 let points = s
@@ -390,6 +393,7 @@ impl TrackBody {
                 .iter()
                 .filter_map(|name| model.bone_index(name))
                 .collect(),
+            layer_m: 0.0,
             height_m: (hi - lo).max(0.1),
             sole_y: if lo.is_finite() { lo } else { 0.0 },
             rest_driver_rotations,

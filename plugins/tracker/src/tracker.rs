@@ -80,8 +80,12 @@ pub struct TrackerSettings {
     pub same_person_m: f32,
     /// The person's build is found bare and under a layer of clothing this thick on the
     /// trunk and upper arms ([`TrackBody::clothe`]), and the clothed body is kept if it
-    /// explains the kept frames better ([`crate::shape`]); 0: bare only.
+    /// explains the kept frames better ([`crate::shape`]; with a [`BuildFit`], by its own
+    /// cost: [`TrackerSettings::clothing_margin`]); 0: bare only.
     pub clothing_m: f32,
+    /// With a [`BuildFit`], the layer is taken when the fit's cost under it is lower by this
+    /// share ([`crate::shape::estimate_with`]).
+    pub clothing_margin: f32,
     /// Every this many frames a body is followed with its back to the sensor, a start facing
     /// it is tried (`tracker/start.rs`, `check_turn`); 0: never.
     pub turn_check_every: usize,
@@ -114,6 +118,7 @@ impl Default for TrackerSettings {
             keep_person_s: 0.5,
             same_person_m: 1.0,
             clothing_m: 0.025,
+            clothing_margin: 0.01,
             turn_check_every: 10,
             recover_folded_at_rest: false,
         }
@@ -407,14 +412,7 @@ impl Tracker {
                 let build_fit = self.build_fit.clone();
                 self.looks += 1;
                 let search = move || match build_fit {
-                    Some(fit) => estimate_with(
-                        &model,
-                        &*fit,
-                        &body,
-                        &kept,
-                        &tracker_settings,
-                        settings.iterations,
-                    ),
+                    Some(fit) => estimate_with(&model, &*fit, &kept, &tracker_settings),
                     None => estimate(&model, &body, &kept, &tracker_settings, settings.iterations),
                 };
                 if settings.background {
