@@ -89,7 +89,7 @@ fn the_build_wears_the_clothing_layer_in_a_shirt_and_not_bare() {
             assert_eq!(layer_cm, 0.0, "{clip}: bare skin taken for a shirt: {r}");
         }
     }
-    // When written: 3 of 4 (02_01's shirt missed).
+    // When written: 4 of 4.
     assert!(
         told + 1 >= shirts,
         "the shirt told in {told} of {shirts} runs"
