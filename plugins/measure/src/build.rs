@@ -38,7 +38,8 @@ pub struct TrackedBuild {
     /// The body under a shirt ([`BuildFit::under_clothes`]): fitted under this share of
     /// the tracker's clothing layer, ...
     pub under_layer: f32,
-    /// ... a point outside the skin weighing this against one inside it, ...
+    /// ... a point outside the skin weighing this against one inside it (over the whole
+    /// body: the bare forearms, legs and head too, whose points lie on the skin), ...
     pub under_outside_weight: f32,
     /// ... and the shape prior's weight this many times [`FitSettings::prior`].
     pub under_prior: f32,

@@ -55,7 +55,8 @@ pub struct FitSettings {
     /// points lie at or outside the skin, and those inside it are the firm evidence. (With
     /// the body under the shirt from `fitroom_measure`'s fit and all 45 T-shirt recordings
     /// of the acceptance set taken as clothed: mean / trunk 61.1 / 43.3 mm at 1, 53.9 / 37.5
-    /// at 0.3; docs/STATUS.md, session 45.)
+    /// at 0.3; docs/STATUS.md, session 45. The tracker's own macro search, without a
+    /// `BuildFit`, fits its clothed candidates with it too: not measured there.)
     pub cloth_gap_weight: f32,
 }
 

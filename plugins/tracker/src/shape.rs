@@ -104,8 +104,8 @@ pub trait BuildFit: Send + Sync {
         clothing_m: f32,
     ) -> Result<BuildFitted, String>;
 
-    /// The skin under a shirt, once the person is found to wear one, if the fitter finds it
-    /// better than [`BuildFit::fit`] under the layer does (`None`: that one is kept).
+    /// The skin under a shirt, once the person is found to wear one, for fitters with a
+    /// way of their own to find it (`None`: [`BuildFit::fit`]'s under the layer is kept).
     fn under_clothes(
         &self,
         _model: &BodyModel,
@@ -317,9 +317,8 @@ pub fn estimate_with(
     let (shape, clothing_m, evaluations) = if t > 0.0 {
         let clothed = fitted(t)?;
         if clothed.cost < bare.cost * (1.0 - f64::from(settings.clothing_margin)) {
-            let under = fit
-                .under_clothes(model, snapshots, t)
-                .map_err(ShapeSearchError::Fit)?;
+            // A failed second fit leaves the first, under the layer, which is good.
+            let under = fit.under_clothes(model, snapshots, t).ok().flatten();
             let evaluations = 2 + usize::from(under.is_some());
             (under.unwrap_or(clothed.shape), t, evaluations)
         } else {
