@@ -19,6 +19,7 @@ use super::OutputArgs;
 use super::app::Inputs;
 use crate::kiosk::actions::TryOn;
 use crate::{Mode, headless, sensors::SensorSpec};
+use bevy::time::TimeUpdateStrategy;
 
 #[derive(Subcommand)]
 pub enum SensorCommand {
@@ -165,12 +166,26 @@ pub(super) fn record_synthetic(args: &RecordArgs) -> Result<RecordReport> {
     {
         tryon.keep_bare = true;
     }
+    // Every cloth step runs: a recording is made offline, and a step dropped because the
+    // machine was busy would make two recordings of one seed differ.
+    if let Some(mut cloth) = app
+        .world_mut()
+        .get_resource_mut::<fitroom_garment::plugin::ClothSettings>()
+    {
+        cloth.budget_ms = f32::INFINITY;
+    }
     warm_up(&mut app, options.garment.is_some())?;
     let mut writer = RecordingWriter::create(&args.out)?;
     let mut truth = TruthWriter::create(&args.out)?;
     let bar = progress(args.frames);
     bar.set_message("synthetic Kinect");
-    let (mut written, mut seen, mut valid) = (0usize, 0u64, 0.0f64);
+    let (mut written, mut valid) = (0usize, 0.0f64);
+    // A camera frame rendered before the garment was dressed shows the person bare: with a
+    // garment, the recording starts at the next one.
+    let mut seen = match options.garment {
+        Some(_) => app.world().resource::<DepthFeed>().frames_received,
+        None => 0,
+    };
     // Two app frames (1/60 s each) per depth frame; the bound only stops a stalled run.
     for _ in 0..args.frames * 4 + 600 {
         if written == args.frames {
@@ -228,10 +243,25 @@ pub(super) fn record_synthetic(args: &RecordArgs) -> Result<RecordReport> {
     })
 }
 
-/// Runs the app until the avatar moves and wears what it was asked to (a garment is
-/// dressed a few frames after the start), so that the recording's first frame shows it.
+/// Runs the app until the avatar moves and wears what it was asked to, so that the
+/// recording's first frame shows it. The garment is dressed when its file has loaded, which
+/// takes wall-clock time: the clock stands still from the avatar's first pose until then, so
+/// that the clip starts at the same moment, and a seed records the same frames, however long
+/// the load took.
 fn warm_up(app: &mut bevy::app::App, garment: bool) -> Result<()> {
-    for _ in 0..600 {
+    let step = app
+        .world()
+        .get_resource::<TimeUpdateStrategy>()
+        .and_then(|s| match s {
+            TimeUpdateStrategy::ManualDuration(d) => Some(*d),
+            _ => None,
+        })
+        .context("the headless app steps its clock by hand")?;
+    // Up to 10 s of simulated time for the avatar to move, then up to 30 s of wall time for
+    // the garment's file.
+    let mut updates = 0;
+    let mut frozen_since: Option<Instant> = None;
+    loop {
         app.update();
         let world = app.world_mut();
         let moving = world
@@ -246,10 +276,29 @@ fn warm_up(app: &mut bevy::app::App, garment: bool) -> Result<()> {
             bail!("the garment cannot be worn: {error}");
         }
         if moving && (dressed || !garment) {
+            app.insert_resource(TimeUpdateStrategy::ManualDuration(step));
             return Ok(());
         }
+        match frozen_since {
+            None if moving => {
+                frozen_since = Some(Instant::now());
+                app.insert_resource(TimeUpdateStrategy::ManualDuration(Duration::ZERO));
+            }
+            None => {
+                updates += 1;
+                if updates >= 600 {
+                    bail!("the avatar did not start moving within 10 s of simulated time");
+                }
+            }
+            Some(since) if since.elapsed() > Duration::from_secs(30) => {
+                bail!(
+                    "the avatar was not dressed within 30 s of its first pose (the garment's file did not load)"
+                );
+            }
+            // The file loads on the asset threads.
+            Some(_) => std::thread::sleep(Duration::from_millis(1)),
+        }
     }
-    bail!("the avatar did not start moving (or was not dressed) within 10 s of simulated time")
 }
 
 /// A Kinect's frames as they come; stops after `--frames` or when the device is gone for
