@@ -5,6 +5,8 @@
 //! * `VERBOSE=1`: per frame, whether the fit (re)started, its statistics and each joint's error;
 //! * `SIGNED=1`: each joint's mean signed error (a bias shows here, not in the mean distance);
 //! * `SAVE_SHAPE=F.ron`: the estimated build written out;
+//! * `JOINTS=F.jsonl`: per frame tracked, the tracked and the true joints and the
+//!   confidences (for analyses the report does not make);
 //! * `PPM_FRAME=N`: frame N as a picture (`/tmp/frame.ppm`: depth, the person, the true and
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
@@ -155,6 +157,10 @@ fn main() -> Result<(), Error> {
     let mut signed = [(Vec3::ZERO, 0usize); 20];
     let mut cpu_ms: Vec<f64> = Vec::new();
     let mut last_size = None;
+    let mut joints_out = match std::env::var("JOINTS") {
+        Ok(path) => Some(std::io::BufWriter::new(std::fs::File::create(path)?)),
+        Err(_) => None,
+    };
     for (entry, line) in recording.depth_entries().zip(&truth) {
         let frame = recording.read_depth(entry, DepthCamera::default())?;
         let joints: Vec<Vec3> = line.joints.iter().map(|j| Vec3::from_array(*j)).collect();
@@ -172,6 +178,17 @@ fn main() -> Result<(), Error> {
         }
         let Some(t) = out else { continue };
         last_size = Some(t.pose.scale * tracker.body.height_m);
+        if let Some(out) = joints_out.as_mut() {
+            use std::io::Write;
+            let line = serde_json::json!({
+                "frame": line.frame,
+                "started": t.started,
+                "tracked": t.joints.iter().map(|j| j.position.to_array()).collect::<Vec<_>>(),
+                "truth": joints.iter().map(|j| j.to_array()).collect::<Vec<_>>(),
+                "confidence": t.joints.iter().map(|j| format!("{:?}", j.confidence)).collect::<Vec<_>>(),
+            });
+            writeln!(out, "{line}")?;
+        }
         for ((sum, j), g) in signed.iter_mut().zip(&t.joints).zip(&joints) {
             sum.0 += j.position - *g;
             sum.1 += 1;
