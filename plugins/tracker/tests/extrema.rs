@@ -148,3 +148,70 @@ fn arms_raised_beside_the_head_leave_the_head_its_name() {
         }
     }
 }
+
+/// Arms hanging against the sides, the hands beside the thighs: the hands are no ends of the
+/// surface (they touch the body), and the ends found there were named hands 39-52 cm from
+/// either (the shoulders' corners, the knees): the start pulled the arms to them, folded up
+/// or behind the back. An end named a hand is near one, or there is none; with the arms
+/// hanging clear of the body both hands are still found.
+#[test]
+fn arms_hanging_against_the_sides_lend_no_hand_to_a_shoulder_or_a_knee() {
+    // A small woman (near the acceptance set's: ANSUR II's 5th percentile) and the default.
+    let woman = fitroom_body::Shape {
+        gender: 0.0,
+        weight: 0.44,
+        muscle: 0.29,
+        height: 0.46,
+        proportions: 0.36,
+        ..Default::default()
+    };
+    for (name, body) in [
+        ("default", common::body()),
+        ("small woman", common::shaped_body(&woman)),
+    ] {
+        // Degrees the upper arms turn down from the rest pose's: 30 hangs clear, 40-50 lays
+        // the hands against the thighs.
+        for (deg, seed) in [(30.0f32, 7u64), (40.0, 8), (45.0, 9), (50.0, 10)] {
+            let arms: common::Turns =
+                &[("upperarm_l", Vec3::Z, -deg), ("upperarm_r", Vec3::Z, deg)];
+            let (skin, joints) = body.posed(&body.locals(arms, 1.0), Vec3::new(0.05, -0.8, 3.0));
+            let frame = common::render(
+                &common::scene(vec![(skin, Label::Body)], &body.model.triangles),
+                seed,
+                0.0,
+            );
+            let ends = ends_of(&frame);
+            let hands = [
+                joints[KinectJoint::HandLeft.index()],
+                joints[KinectJoint::HandRight.index()],
+            ];
+            let named: Vec<(Part, f32)> = ends
+                .iter()
+                .filter(|e| matches!(e.part, Part::HandLeft | Part::HandRight))
+                .map(|e| {
+                    (
+                        e.part,
+                        hands
+                            .iter()
+                            .map(|h| h.distance(e.joint))
+                            .fold(f32::MAX, f32::min),
+                    )
+                })
+                .collect();
+            println!("{name}, arms {deg}° down: hands named {named:?}");
+            for (part, d) in &named {
+                assert!(
+                    *d < 0.2,
+                    "{name}, arms {deg}° down: {part:?} named {d:.2} m from either hand"
+                );
+            }
+            if deg <= 30.0 {
+                assert_eq!(
+                    named.len(),
+                    2,
+                    "{name}, arms hanging clear: both hands found: {ends:?}"
+                );
+            }
+        }
+    }
+}

@@ -65,7 +65,9 @@ fn first_frame(turns: Turns, start_arms_hanging: bool, z: f32, seed: u64) -> (f3
 /// A hand resting against the thigh is no geodesic end of the body: the end taken for it
 /// (an elbow, a hip) pulled the arm into the trunk and the trunk askew with it (CMU 07_06's
 /// small woman: both arms 20-50 cm off for the first 20 frames, and one arm never found
-/// again). The start also tries the arms hanging, not pulled to the hands' ends.
+/// again). The start also tries the arms hanging, not pulled to the hands' ends; and the
+/// extrema no longer name such an end a hand (`extrema.rs`, `unname_unlikely_hands`), so a
+/// start pulled to the ends alone (which put these arms 25 cm or more off) finds them too.
 #[test]
 fn a_person_first_seen_with_the_hands_by_the_thighs_is_started_with_them_there() {
     for (name, turns) in [
@@ -82,7 +84,7 @@ fn a_person_first_seen_with_the_hands_by_the_thighs_is_started_with_them_there()
                 pulled * 1000.0
             );
             assert!(arms < 0.1, "{name} at {z} m: arms {arms:.3} m");
-            assert!(pulled > 0.25, "{name} at {z} m: pulled {pulled:.3} m");
+            assert!(pulled < 0.1, "{name} at {z} m: pulled {pulled:.3} m");
         }
     }
 }
