@@ -279,7 +279,8 @@ const HAND_NEAR: f32 = 0.5;
 /// over the floor: hanging beside the hips, or held before the belly.
 const HAND_NEAR_HEIGHTS: std::ops::RangeInclusive<f32> = 0.33..=0.6;
 /// ... or anywhere this much nearer the sensor than the person's centroid, metres: held
-/// before the body (a runner's hands before the chest, 29-36 cm before it on CMU 09_01).
+/// before the body (a runner's hands before the chest on CMU 09_01's first frames: 39-46 cm
+/// before the spine joint, which lies behind the centroid of what is seen).
 const HAND_BEFORE_M: f32 = 0.2;
 
 /// Takes the hand's name from an end that cannot be a hand: a hand is an arm's length round
@@ -288,8 +289,8 @@ const HAND_BEFORE_M: f32 = 0.2;
 /// sleeves join the arms to the trunk) the hands are no ends, and the ends named for them are
 /// the shoulders' corners (0.70-0.84 of the height) or the knees (0.23-0.30). On the first
 /// frames of the 90 bare and T-shirt recordings of the acceptance set, the 45 ends named for
-/// hands 20 cm or more from either hand all lay so, none of them 20 cm before the body, and
-/// of the 135 within 20 cm, only a runner's 3 hands raised before the chest, 40 cm before it.
+/// hands 20 cm or more from either hand all lay so (at most 16 cm before the spine joint), and
+/// of the 135 within 20 cm only a runner's 3 hands before the chest (39-46 cm before it).
 fn unname_unlikely_hands(found: &mut [Extremum], person: &Segmentation) {
     // (A person lower than half a metre, lying or rolled up, is measured against that.)
     let height = person.top_m.max(0.5);
