@@ -16,11 +16,13 @@
 //!   `START_PULLED=1`: a start pulls the arms to the hands' ends only (no hanging arms tried);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
-//!   `SNAPS`, `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
+//!   `SNAPS`, `LOOKS` (looks at the build per person), `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
 //!   clothing layer tried, metres; 0: none), `TURN_CHECK` (frames between checks of a body
 //!   turned away; 0: none): override the settings; `FOLDED_AT_REST=1`: a folded arm also tried
 //!   at rest; `INFLATE=T`: the given
 //!   `SHAPE` in a clothing layer T metres thick;
+//! * `MAXFRAMES=N`: the first N frames only (the build's looks are over by frame 70 when
+//!   the person stands upright);
 //! * `PARTS=F.forest`: a body-part forest's joint proposals as one more hypothesis for a
 //!   limb suspected lost (grow one with the tracker's `parts` example).
 //!
@@ -71,6 +73,9 @@ fn settings() -> TrackerSettings {
     }
     if let Some(v) = env("SNAPS") {
         s.shape.snapshots = v as usize;
+    }
+    if let Some(v) = env("LOOKS") {
+        s.shape.looks = v as usize;
     }
     if let Some(v) = env("EVERY") {
         s.shape.every = v as usize;
@@ -161,7 +166,8 @@ fn main() -> Result<(), Error> {
         Ok(path) => Some(std::io::BufWriter::new(std::fs::File::create(path)?)),
         Err(_) => None,
     };
-    for (entry, line) in recording.depth_entries().zip(&truth) {
+    let max_frames = env("MAXFRAMES").map(|v| v as usize).unwrap_or(usize::MAX);
+    for (entry, line) in recording.depth_entries().zip(&truth).take(max_frames) {
         let frame = recording.read_depth(entry, DepthCamera::default())?;
         let joints: Vec<Vec3> = line.joints.iter().map(|j| Vec3::from_array(*j)).collect();
         let start = cpu_ns();
