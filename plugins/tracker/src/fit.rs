@@ -58,6 +58,15 @@ pub struct FitSettings {
     /// at 0.3; docs/STATUS.md, session 45. The tracker's own macro search, without a
     /// `BuildFit`, fits its clothed candidates with it too: not measured there.)
     pub cloth_gap_weight: f32,
+    /// Weight of one contact sample (a point on a forearm's or a hand's axis) sunk into the
+    /// trunk's skin, relative to one data point. An arm hanging against a heavy trunk or a
+    /// shirt shows no gap in the depth, and its points are explained as well by a forearm
+    /// folded into the belly as by one beside it; the body cannot pass through itself.
+    pub contact_weight: f32,
+    /// How deep an arm may sink into the trunk's skin before the contact term pushes it out,
+    /// metres (flesh gives, and the capsules and the skin only approximate the person), on top
+    /// of the clothing layer (an arm against the body lies inside the layer).
+    pub contact_tolerance_m: f32,
 }
 
 impl Default for FitSettings {
@@ -71,6 +80,8 @@ impl Default for FitSettings {
             scale_stiffness: 1.0e6,
             arm_front_cap_m: 0.05,
             cloth_gap_weight: 0.3,
+            contact_weight: 20.0,
+            contact_tolerance_m: 0.02,
         }
     }
 }
@@ -116,6 +127,8 @@ struct Layout {
     arm: Vec<bool>,
     /// Per bone, whether it wears the body's clothing layer (none on a bare body).
     loose: Vec<bool>,
+    /// Per bone, whether it is a forearm's or a hand's: an arm's but not an upper arm.
+    forearm: Vec<bool>,
 }
 
 const ROOT: usize = 7;
@@ -136,12 +149,15 @@ impl Layout {
             body.drivers[KinectJoint::ElbowLeft.index()],
             body.drivers[KinectJoint::ElbowRight.index()],
         ];
-        let arm = (0..body.parents.len())
+        let arm: Vec<bool> = (0..body.parents.len())
             .map(|b| {
                 body.chains[b]
                     .iter()
                     .any(|&j| shoulders.contains(&body.joints[j].bone))
             })
+            .collect();
+        let forearm = (0..body.parents.len())
+            .map(|b| arm[b] && !shoulders.contains(&b))
             .collect();
         let loose = (0..body.parents.len())
             .map(|b| body.layer_m > 0.0 && body.clothed.contains(&b))
@@ -151,6 +167,7 @@ impl Layout {
             count: at,
             arm,
             loose,
+            forearm,
         }
     }
 }
@@ -451,6 +468,7 @@ impl Fitter {
             }
         }
         stats.outside = outside as f32 / seen.max(1) as f32;
+        self.contact(body, layout, &posed, pivot, settings);
         // Detections.
         for &(joint, target, weight) in obs.targets {
             let (bone, local) = body.kinect[joint];
@@ -464,6 +482,71 @@ impl Fitter {
         }
         self.posed = posed;
         stats
+    }
+
+    /// The contact term: each forearm's and hand's axis, sampled, kept out of the trunk's
+    /// skin (beyond [`FitSettings::contact_tolerance_m`] and the clothing layer). The sample's
+    /// sphere against the skin of the nearest trunk capsule's bone (its nearest vertex's
+    /// tangent plane); the row moves the arm out and the trunk away, so a contact never moves
+    /// the body as a whole.
+    fn contact(
+        &mut self,
+        body: &TrackBody,
+        layout: &Layout,
+        posed: &Posed,
+        pivot: Vec3,
+        settings: &FitSettings,
+    ) {
+        if settings.contact_weight <= 0.0 || body.trunk.is_empty() {
+            return;
+        }
+        let tolerance = settings.contact_tolerance_m + body.layer_m;
+        for (k, &(a, b, ra, rb)) in posed.capsules.iter().enumerate() {
+            let bone = body.capsules[k].bone;
+            if !layout.forearm[bone] {
+                continue;
+            }
+            for t in [0.1, 0.5, 0.9] {
+                let c = a.lerp(b, t);
+                let r = ra + (rb - ra) * t;
+                // The nearest trunk capsule picks the bone whose skin is asked.
+                let mut nearest = (f32::INFINITY, Vec3::ZERO, usize::MAX);
+                for (q, &(qa, qb, qra, qrb)) in posed.capsules.iter().enumerate() {
+                    if body.trunk.contains(&body.capsules[q].bone) {
+                        let (d, n) = capsule_distance(c, qa, qb, qra, qrb);
+                        if d < nearest.0 {
+                            nearest = (d, n, q);
+                        }
+                    }
+                }
+                let (d, capsule_n, q) = nearest;
+                // Far from every trunk capsule: no contact to test.
+                if q == usize::MAX || d > r + 0.05 {
+                    continue;
+                }
+                let trunk = body.capsules[q].bone;
+                let surface = &body.surfaces[trunk];
+                let local = posed.frames[trunk].inverse().transform_point3(c);
+                // The skin's nearest vertex within reach (a few cm); deeper in, the capsule.
+                let (at, n) = match surface.nearest(local) {
+                    Some(v) => (
+                        posed.frames[trunk].transform_point3(surface.points[v as usize]),
+                        (posed.rotations[trunk] * surface.normals[v as usize]).normalize_or_zero(),
+                    ),
+                    None if d < 0.0 => (c - capsule_n * d, capsule_n),
+                    None => continue,
+                };
+                let overlap = r - n.dot(c - at);
+                if overlap <= tolerance {
+                    continue;
+                }
+                // d(overlap) = -n·δ(arm) + n·δ(trunk).
+                self.row.clear();
+                self.point_row(body, layout, posed, pivot, bone, c, -n);
+                self.point_row(body, layout, posed, pivot, trunk, at, n);
+                self.add_row(overlap - tolerance, settings.contact_weight, layout.count);
+            }
+        }
     }
 
     /// Adds each capsule's gathered data residuals to the normal equations: with the row of

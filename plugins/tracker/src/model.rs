@@ -77,6 +77,9 @@ const TRACKED: [(&str, bool, f32, f32, f32); 18] = [
     ("spine_02", false, 15.0, 15.0, 6.0),
 ];
 
+/// The trunk's bones: the forearms and hands are kept out of their skin.
+pub const TRUNK_BONES: [&str; 4] = ["pelvis", "spine_01", "spine_02", "spine_03"];
+
 /// The bones a shirt covers: the trunk, the clavicles and the upper arms (the clothing layer
 /// of [`TrackBody::clothe`] and of the measurement's fit).
 pub const CLOTHED_BONES: [&str; 8] = [
@@ -135,6 +138,8 @@ pub struct TrackBody {
     pub root: usize,
     /// The bones a shirt covers ([`CLOTHED_BONES`]), for [`TrackBody::clothe`].
     pub clothed: Vec<usize>,
+    /// The trunk's bones ([`TRUNK_BONES`]), which the arms may not pass into.
+    pub trunk: Vec<usize>,
     /// The clothing layer [`TrackBody::clothe`] put on, metres (0: bare).
     pub layer_m: f32,
     /// Sole to the top of the head, metres.
@@ -390,6 +395,10 @@ impl TrackBody {
             drivers,
             root: bone("pelvis").unwrap_or(root),
             clothed: CLOTHED_BONES
+                .iter()
+                .filter_map(|name| model.bone_index(name))
+                .collect(),
+            trunk: TRUNK_BONES
                 .iter()
                 .filter_map(|name| model.bone_index(name))
                 .collect(),
