@@ -244,6 +244,9 @@ pub struct RecordingEval {
     /// The clothing layer the person was found to wear (the build's search tries one on the
     /// trunk and upper arms), cm; `None`: no build found.
     pub clothing_cm: Option<f64>,
+    /// The median inward step seen in the outline of the person's hanging upper arms, where a
+    /// short sleeve ends, mm (`fitroom_tracker::sleeve`; `None`: too few hanging arms seen).
+    pub sleeve_step_mm: Option<f64>,
 }
 
 fn print_eval(r: &TrackEvalReport) {
@@ -254,9 +257,12 @@ fn print_eval(r: &TrackEvalReport) {
         let clothing = d
             .clothing_cm
             .map_or(String::new(), |c| format!(", clothing {c:.1} cm"));
+        let sleeve = d
+            .sleeve_step_mm
+            .map_or(String::new(), |s| format!(" (sleeve step {s:.0} mm)"));
         println!(
             "{}: {} frames, mean {:.0} mm (trunk {:.0}), p95 {:.0} mm, every joint tracked or \
-             inferred in {:.1} % of frames in view, {} starts{height}{clothing}",
+             inferred in {:.1} % of frames in view, {} starts{height}{clothing}{sleeve}",
             d.dump, d.frames, d.mean_mm, d.trunk_mean_mm, d.p95_mm, d.all_joints_pct, d.starts
         );
     }
@@ -376,6 +382,7 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
                 .shape
                 .as_ref()
                 .map(|e| f64::from(e.clothing_m) * 100.0),
+            sleeve_step_mm: tracker.sleeve_step_m().map(|s| f64::from(s) * 1000.0),
         });
     }
     if let Some(png) = png {

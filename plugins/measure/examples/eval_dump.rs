@@ -16,7 +16,7 @@
 //!   `START_PULLED=1`: a start pulls the arms to the hands' ends only (no hanging arms tried);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
-//!   `SNAPS`, `LOOKS` (looks at the build per person), `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
+//!   `SNAPS`, `LOOKS` (looks at the build per person), `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `SLEEVE_SEEN`, `SLEEVE_BARE` (the sleeves' steps that decide the layer, metres), `CONTACT`, `CONTACT_TOL` (the weight and tolerance of the forearms' contact with the trunk), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
 //!   clothing layer tried, metres; 0: none), `TURN_CHECK` (frames between checks of a body
 //!   turned away; 0: none): override the settings; `FOLDED_AT_REST=1`: a folded arm also tried
 //!   at rest; `INFLATE=T`: the given
@@ -91,6 +91,18 @@ fn settings() -> TrackerSettings {
     }
     if let Some(v) = env("CLOTH_GAP") {
         s.fit.cloth_gap_weight = v;
+    }
+    if let Some(v) = env("SLEEVE_SEEN") {
+        s.sleeve_seen_m = v;
+    }
+    if let Some(v) = env("SLEEVE_BARE") {
+        s.sleeve_bare_m = v;
+    }
+    if let Some(v) = env("CONTACT") {
+        s.fit.contact_weight = v;
+    }
+    if let Some(v) = env("CONTACT_TOL") {
+        s.fit.contact_tolerance_m = v;
     }
     if let Some(v) = env("CLOTH_MARGIN") {
         s.clothing_margin = v;
@@ -230,6 +242,9 @@ fn main() -> Result<(), Error> {
     }
     if let Some(size) = last_size {
         eprintln!("height (the body's, as sized in the last frame tracked): {size:.4} m");
+    }
+    if let Some(step) = tracker.sleeve_step_m() {
+        eprintln!("sleeve step (median): {:.1} mm", step * 1000.0);
     }
     if let Some(e) = &tracker.shape {
         eprintln!(

@@ -18,7 +18,10 @@
 //! found twice: bare, and under a layer of clothing on the trunk and the upper arms
 //! ([`TrackBody::clothe`]); the body that explains the kept frames better by a margin is
 //! kept, in its layer (docs/STATUS.md, session 39). With a [`BuildFit`] the fit's own cost
-//! decides, and the body under a shirt is fitted as one inside it ([`estimate_with`]).
+//! decides, and the body under a shirt is fitted as one inside it ([`estimate_with`]). Both
+//! costs tell a shirt poorly from one look (a bare build swells into it); a short sleeve's end
+//! tells it far better ([`crate::sleeve`]), so when the sleeves are seen, or the upper arms
+//! seen bare, the costs are not asked (session 49).
 //!
 //! The first search runs on the first frames the person is tracked well in, so that their
 //! build is used as soon as it can be; a second runs on frames spread over the next seconds
@@ -35,6 +38,7 @@ use fitroom_depth::DepthFrame;
 
 use crate::fit::FitStats;
 use crate::model::{ModelError, TrackBody};
+use crate::sleeve::Sleeves;
 use crate::tracker::{Tracked, Tracker, TrackerSettings};
 
 /// How the build is estimated.
@@ -182,13 +186,15 @@ fn cost(fit: &FitStats) -> f32 {
 
 /// The build of the person in `snapshots`, which were tracked with `tracked_with`: a
 /// coordinate search over the macro sliders from MakeHuman's default, bare and under the
-/// clothing layer ([`TrackerSettings::clothing_m`]); the better explained is kept.
+/// clothing layer ([`TrackerSettings::clothing_m`]); the better explained is kept, unless
+/// the `sleeves` tell ([`crate::sleeve`]).
 pub fn estimate(
     model: &BodyModel,
     tracked_with: &TrackBody,
     snapshots: &[Snapshot],
     settings: &TrackerSettings,
     iterations: usize,
+    sleeves: Sleeves,
 ) -> Result<Estimate, ShapeSearchError> {
     if snapshots.is_empty() {
         return Err(ShapeSearchError::NoSnapshots);
@@ -199,10 +205,13 @@ pub fn estimate(
         settings,
         iterations,
     };
-    let bare = search(model, &fits, 0.0)?;
-    if settings.clothing_m <= 0.0 {
-        return Ok(bare);
+    if settings.clothing_m <= 0.0 || sleeves == Sleeves::Bare {
+        return search(model, &fits, 0.0);
     }
+    if sleeves == Sleeves::Seen {
+        return search(model, &fits, settings.clothing_m);
+    }
+    let bare = search(model, &fits, 0.0)?;
     let clothed = search(model, &fits, settings.clothing_m)?;
     let evaluations = bare.evaluations + clothed.evaluations;
     let (Some(a), Some(b)) = (bare.cost_m, clothed.cost_m) else {
@@ -291,10 +300,11 @@ impl Refits<'_> {
     }
 }
 
-/// The build of the person in `snapshots` as `fit` finds it, bare and under the clothing
-/// layer ([`TrackerSettings::clothing_m`]): the layer is taken when the fit's own cost falls
-/// by [`TrackerSettings::clothing_margin`] under it (then the body under it is
-/// [`BuildFit::under_clothes`]'s, if it gives one).
+/// The build of the person in `snapshots` as `fit` finds it, bare or under the clothing
+/// layer ([`TrackerSettings::clothing_m`]; then the body under it is
+/// [`BuildFit::under_clothes`]'s, if it gives one): as the `sleeves` say ([`crate::sleeve`]),
+/// and when they do not tell, the layer is taken when the fit's own cost falls by
+/// [`TrackerSettings::clothing_margin`] under it.
 ///
 /// (The fit's cost, not the tracker's: each body is fitted to the surface it is given, so a
 /// bare build swells into a shirt and explains its frames about as well as the build under
@@ -307,25 +317,32 @@ pub fn estimate_with(
     fit: &dyn BuildFit,
     snapshots: &[Snapshot],
     settings: &TrackerSettings,
+    sleeves: Sleeves,
 ) -> Result<Estimate, ShapeSearchError> {
     if snapshots.is_empty() {
         return Err(ShapeSearchError::NoSnapshots);
     }
     let fitted = |t: f32| fit.fit(model, snapshots, t).map_err(ShapeSearchError::Fit);
-    let bare = fitted(0.0)?;
     let t = settings.clothing_m;
-    let (shape, clothing_m, evaluations) = if t > 0.0 {
-        let clothed = fitted(t)?;
-        if clothed.cost < bare.cost * (1.0 - f64::from(settings.clothing_margin)) {
-            // A failed second fit leaves the first, under the layer, which is good.
-            let under = fit.under_clothes(model, snapshots, t).ok().flatten();
-            let evaluations = 2 + usize::from(under.is_some());
-            (under.unwrap_or(clothed.shape), t, evaluations)
-        } else {
-            (bare.shape, 0.0, 2)
+    // The body under the layer: a failed second fit leaves the first, which is good.
+    let clothe = |clothed: BuildFitted, evaluations: usize| {
+        let under = fit.under_clothes(model, snapshots, t).ok().flatten();
+        let evaluations = evaluations + usize::from(under.is_some());
+        (under.unwrap_or(clothed.shape), t, evaluations)
+    };
+    let (shape, clothing_m, evaluations) = match sleeves {
+        _ if t <= 0.0 => (fitted(0.0)?.shape, 0.0, 1),
+        Sleeves::Bare => (fitted(0.0)?.shape, 0.0, 1),
+        Sleeves::Seen => clothe(fitted(t)?, 1),
+        Sleeves::Unsure => {
+            let bare = fitted(0.0)?;
+            let clothed = fitted(t)?;
+            if clothed.cost < bare.cost * (1.0 - f64::from(settings.clothing_margin)) {
+                clothe(clothed, 2)
+            } else {
+                (bare.shape, 0.0, 2)
+            }
         }
-    } else {
-        (bare.shape, 0.0, 1)
     };
     let mut body = TrackBody::new(model, &model.shaped(&shape)?.positions)?;
     body.clothe(clothing_m);

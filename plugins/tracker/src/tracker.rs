@@ -23,6 +23,7 @@ use crate::shape::{
     BuildFit, Estimate, ShapeSearchError, ShapeSettings, Snapshot, estimate, estimate_with,
 };
 use crate::silhouette::Silhouette;
+use crate::sleeve;
 
 /// The person's size from the frames tracked well ([`Tracker::refine_size`]): set anew every
 /// `SIZE_EVERY` of them to the `SIZE_QUANTILE` of all so far, until `SIZE_FRAMES`.
@@ -78,14 +79,20 @@ pub struct TrackerSettings {
     /// 0.75 of his height.) Longer, or elsewhere: a new person.
     pub keep_person_s: f64,
     pub same_person_m: f32,
-    /// The person's build is found bare and under a layer of clothing this thick on the
-    /// trunk and upper arms ([`TrackBody::clothe`]), and the clothed body is kept if it
-    /// explains the kept frames better ([`crate::shape`]; with a [`BuildFit`], by its own
-    /// cost: [`TrackerSettings::clothing_margin`]); 0: bare only.
+    /// The person's build is found bare or under a layer of clothing this thick on the
+    /// trunk and upper arms ([`TrackBody::clothe`]): as the sleeves say
+    /// ([`TrackerSettings::sleeve_seen_m`]), else the clothed body is kept if it explains the
+    /// kept frames better ([`crate::shape`]; with a [`BuildFit`], by its own cost:
+    /// [`TrackerSettings::clothing_margin`]); 0: bare only.
     pub clothing_m: f32,
     /// With a [`BuildFit`], the layer is taken when the fit's cost under it is lower by this
     /// share ([`crate::shape::estimate_with`]).
     pub clothing_margin: f32,
+    /// The layer's choice is left to the costs only when the sleeves do not tell
+    /// ([`crate::sleeve`]): a median step in the hanging upper arms' outlines of at least
+    /// `sleeve_seen_m` takes the layer, under `sleeve_bare_m` leaves it off; 0 and 0: never.
+    pub sleeve_seen_m: f32,
+    pub sleeve_bare_m: f32,
     /// Every this many frames a body is followed with its back to the sensor, a start facing
     /// it is tried (`tracker/start.rs`, `check_turn`); 0: never.
     pub turn_check_every: usize,
@@ -119,6 +126,8 @@ impl Default for TrackerSettings {
             same_person_m: 1.0,
             clothing_m: 0.025,
             clothing_margin: 0.01,
+            sleeve_seen_m: 0.02,
+            sleeve_bare_m: 0.01,
             turn_check_every: 10,
             recover_folded_at_rest: false,
         }
@@ -280,6 +289,8 @@ pub struct Tracker {
     estimation: Estimation,
     /// How many searches for the build ran for this person.
     looks: usize,
+    /// The steps in the person's sleeves measured in the frames kept so far ([`crate::sleeve`]).
+    sleeve_steps: Vec<f32>,
     /// The build estimated for the person tracked, and its search's report.
     pub shape: Option<Estimate>,
     /// Why the last search for a build failed (the body kept), if it did.
@@ -322,6 +333,7 @@ impl Tracker {
             build_fit: None,
             estimation: Estimation::Off,
             looks: 0,
+            sleeve_steps: Vec::new(),
             shape: None,
             shape_error: None,
             search_ms: None,
@@ -371,6 +383,12 @@ impl Tracker {
         self
     }
 
+    /// The median step in the person's sleeves seen so far, metres ([`crate::sleeve`];
+    /// `None`: fewer than three hanging upper arms seen in the frames kept for the build).
+    pub fn sleeve_step_m(&self) -> Option<f32> {
+        sleeve::median_step(&self.sleeve_steps)
+    }
+
     /// The person's build, once estimated.
     pub fn person_shape(&self) -> Option<&Shape> {
         self.shape.as_ref().map(|e| &e.shape)
@@ -407,13 +425,38 @@ impl Tracker {
                     return;
                 };
                 let kept = std::mem::take(kept);
+                for k in &kept {
+                    let joints: Vec<_> = k
+                        .tracked
+                        .joints
+                        .iter()
+                        .map(|j| (j.position, j.pixel))
+                        .collect();
+                    self.sleeve_steps.extend(sleeve::steps(
+                        &k.frame,
+                        &k.tracked.person.mask,
+                        &joints,
+                    ));
+                }
+                let sleeves = sleeve::judge(
+                    &self.sleeve_steps,
+                    self.settings.sleeve_seen_m,
+                    self.settings.sleeve_bare_m,
+                );
                 let (body, mut tracker_settings) = (self.body.clone(), self.settings);
                 tracker_settings.points = settings.points;
                 let build_fit = self.build_fit.clone();
                 self.looks += 1;
                 let search = move || match build_fit {
-                    Some(fit) => estimate_with(&model, &*fit, &kept, &tracker_settings),
-                    None => estimate(&model, &body, &kept, &tracker_settings, settings.iterations),
+                    Some(fit) => estimate_with(&model, &*fit, &kept, &tracker_settings, sleeves),
+                    None => estimate(
+                        &model,
+                        &body,
+                        &kept,
+                        &tracker_settings,
+                        settings.iterations,
+                        sleeves,
+                    ),
                 };
                 if settings.background {
                     self.estimation = Estimation::Running(std::thread::spawn(search));
@@ -543,6 +586,7 @@ impl Tracker {
         }
         self.estimation = Estimation::Collecting(Vec::new(), usize::MAX);
         self.looks = 0;
+        self.sleeve_steps.clear();
         if self.shape.take().is_some()
             && let Some(body) = &self.default_body
         {
