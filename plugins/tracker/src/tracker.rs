@@ -90,7 +90,8 @@ pub struct TrackerSettings {
     pub clothing_margin: f32,
     /// The layer's choice is left to the costs only when the sleeves do not tell
     /// ([`crate::sleeve`]): a median step in the hanging upper arms' outlines of at least
-    /// `sleeve_seen_m` takes the layer, under `sleeve_bare_m` leaves it off; 0 and 0: never.
+    /// `sleeve_seen_m` takes the layer, under `sleeve_bare_m` leaves it off (infinity and 0:
+    /// the costs always decide).
     pub sleeve_seen_m: f32,
     pub sleeve_bare_m: f32,
     /// Every this many frames a body is followed with its back to the sensor, a start facing
