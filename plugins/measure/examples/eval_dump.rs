@@ -56,21 +56,6 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("POINTS") {
         s.points = v as usize;
     }
-    if let Some(v) = env("DAMP") {
-        s.fit.damping = v;
-    }
-    if let Some(v) = env("FREE") {
-        s.fit.free_space_weight = v;
-    }
-    if let Some(v) = env("HUBER") {
-        s.fit.huber_m = v;
-    }
-    if let Some(v) = env("SCALE_STIFF") {
-        s.fit.scale_stiffness = v;
-    }
-    if let Some(v) = env("OUTLIER") {
-        s.fit.outlier_m = v;
-    }
     if let Some(v) = env("SNAPS") {
         s.shape.snapshots = v as usize;
     }
@@ -80,46 +65,41 @@ fn settings() -> TrackerSettings {
     if let Some(v) = env("EVERY") {
         s.shape.every = v as usize;
     }
-    if let Some(v) = env("CARRY_TURN") {
-        s.carry_turn = v;
-    }
-    if let Some(v) = env("TURN_MARGIN") {
-        s.turn_margin = v;
-    }
-    if let Some(v) = env("ARM_FRONT_CAP") {
-        s.fit.arm_front_cap_m = v;
-    }
-    if let Some(v) = env("CLOTH_GAP") {
-        s.fit.cloth_gap_weight = v;
-    }
-    if let Some(v) = env("SLEEVE_SEEN") {
-        s.sleeve_seen_m = v;
-    }
-    if let Some(v) = env("SLEEVE_BARE") {
-        s.sleeve_bare_m = v;
-    }
-    if let Some(v) = env("CONTACT") {
-        s.fit.contact_weight = v;
-    }
-    if let Some(v) = env("CONTACT_TOL") {
-        s.fit.contact_tolerance_m = v;
-    }
-    if let Some(v) = env("CLOTH_MARGIN") {
-        s.clothing_margin = v;
-    }
-    if std::env::var("START_PULLED").is_ok() {
-        s.start_arms_hanging = false;
-    }
-    if let Some(v) = env("CLOTHING") {
-        s.clothing_m = v;
-    }
     if let Some(v) = env("TURN_CHECK") {
         s.turn_check_every = v as usize;
     }
-    s.recover_folded_at_rest = std::env::var("FOLDED_AT_REST").is_ok();
-    if let Some(v) = env("PMINW") {
-        s.parts_min_weight = v;
+    // The settings in metres or weights, each overridden by its variable if set.
+    let f = &mut s.fit;
+    for (key, field) in [
+        ("DAMP", &mut f.damping),
+        ("FREE", &mut f.free_space_weight),
+        ("HUBER", &mut f.huber_m),
+        ("SCALE_STIFF", &mut f.scale_stiffness),
+        ("OUTLIER", &mut f.outlier_m),
+        ("ARM_FRONT_CAP", &mut f.arm_front_cap_m),
+        ("CLOTH_GAP", &mut f.cloth_gap_weight),
+        ("CONTACT", &mut f.contact_weight),
+        ("CONTACT_TOL", &mut f.contact_tolerance_m),
+    ] {
+        if let Some(v) = env(key) {
+            *field = v;
+        }
     }
+    for (key, field) in [
+        ("CARRY_TURN", &mut s.carry_turn),
+        ("TURN_MARGIN", &mut s.turn_margin),
+        ("SLEEVE_SEEN", &mut s.sleeve_seen_m),
+        ("SLEEVE_BARE", &mut s.sleeve_bare_m),
+        ("CLOTH_MARGIN", &mut s.clothing_margin),
+        ("CLOTHING", &mut s.clothing_m),
+        ("PMINW", &mut s.parts_min_weight),
+    ] {
+        if let Some(v) = env(key) {
+            *field = v;
+        }
+    }
+    s.start_arms_hanging = std::env::var("START_PULLED").is_err();
+    s.recover_folded_at_rest = std::env::var("FOLDED_AT_REST").is_ok();
     s.segment.wall = std::env::var("NO_WALL").is_err();
     s.scale = env("SCALE");
     s.recover = std::env::var("NO_RECOVER").is_err();
