@@ -237,6 +237,8 @@ pub struct RecordingEval {
     pub trunk_mean_mm: f64,
     pub p95_mm: f64,
     pub all_joints_pct: f64,
+    /// Frames the tracker reported the person lost (every joint not tracked).
+    pub lost_frames: usize,
     pub starts: usize,
     /// The person's height as the tracker sized them in the last frame tracked, cm (the
     /// recording's own is in its `body.json`, `stature_cm`).
@@ -262,14 +264,21 @@ fn print_eval(r: &TrackEvalReport) {
             .map_or(String::new(), |s| format!(" (sleeve step {s:.0} mm)"));
         println!(
             "{}: {} frames, mean {:.0} mm (trunk {:.0}), p95 {:.0} mm, every joint tracked or \
-             inferred in {:.1} % of frames in view, {} starts{height}{clothing}{sleeve}",
-            d.dump, d.frames, d.mean_mm, d.trunk_mean_mm, d.p95_mm, d.all_joints_pct, d.starts
+             inferred in {:.1} % of frames in view, {} lost, {} starts{height}{clothing}{sleeve}",
+            d.dump,
+            d.frames,
+            d.mean_mm,
+            d.trunk_mean_mm,
+            d.p95_mm,
+            d.all_joints_pct,
+            d.lost_frames,
+            d.starts
         );
     }
     let o = &r.overall;
     println!(
         "overall: {} frames ({} tracked, {} wholly in view): mean {:.1} mm, trunk {:.1} mm, \
-         p95 {:.0} mm; every joint tracked or inferred in {:.1} %; {} starts; {:.2} ms per \
+         p95 {:.0} mm; every joint tracked or inferred in {:.1} % ({} frames lost); {} starts; {:.2} ms per \
          frame (p95 {:.2}); {} searches for the person's build, {:.0} ms each (the app runs \
          them on a thread of their own)",
         o.frames,
@@ -279,6 +288,7 @@ fn print_eval(r: &TrackEvalReport) {
         o.trunk_mean_mm,
         o.p95_mm,
         o.all_joints_pct,
+        o.lost_frames,
         o.starts,
         o.time_mean_ms,
         o.time_p95_ms,
@@ -376,6 +386,7 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
             trunk_mean_mm: r.trunk_mean_mm,
             p95_mm: r.p95_mm,
             all_joints_pct: r.all_joints_pct,
+            lost_frames: r.lost_frames,
             starts: r.starts,
             stature_cm,
             clothing_cm: tracker

@@ -5,8 +5,10 @@
 //! * `VERBOSE=1`: per frame, whether the fit (re)started, its statistics and each joint's error;
 //! * `SIGNED=1`: each joint's mean signed error (a bias shows here, not in the mean distance);
 //! * `SAVE_SHAPE=F.ron`: the estimated build written out;
-//! * `JOINTS=F.jsonl`: per frame tracked, the tracked and the true joints and the
-//!   confidences (for analyses the report does not make);
+//! * `JOINTS=F.jsonl`: per frame tracked, the tracked and the true joints, the
+//!   confidences and the fit's figures (`fit`: share of points near the body, share of the
+//!   body outside the silhouette, mean residual in metres, share of outliers), for analyses
+//!   the report does not make;
 //! * `PPM_FRAME=N`: frame N as a picture (`/tmp/frame.ppm`: depth, the person, the true and
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
@@ -18,7 +20,8 @@
 //!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
 //!   `SNAPS`, `LOOKS` (looks at the build per person), `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `SLEEVE_SEEN`, `SLEEVE_BARE` (the sleeves' steps that decide the layer, metres), `CONTACT`, `CONTACT_TOL` (the weight and tolerance of the forearms' contact with the trunk), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
 //!   clothing layer tried, metres; 0: none), `TURN_CHECK` (frames between checks of a body
-//!   turned away; 0: none): override the settings; `FOLDED_AT_REST=1`: a folded arm also tried
+//!   turned away; 0: none), `LOST` (the share of points near the body under which a frame is
+//!   reported lost; 0: never): override the settings; `FOLDED_AT_REST=1`: a folded arm also tried
 //!   at rest; `INFLATE=T`: the given
 //!   `SHAPE` in a clothing layer T metres thick;
 //! * `MAXFRAMES=N`: the first N frames only (the build's looks are over by frame 70 when
@@ -93,6 +96,7 @@ fn settings() -> TrackerSettings {
         ("CLOTH_MARGIN", &mut s.clothing_margin),
         ("CLOTHING", &mut s.clothing_m),
         ("PMINW", &mut s.parts_min_weight),
+        ("LOST", &mut s.lost_inliers),
     ] {
         if let Some(v) = env(key) {
             *field = v;
@@ -184,6 +188,7 @@ fn main() -> Result<(), Error> {
                 "tracked": t.joints.iter().map(|j| j.position.to_array()).collect::<Vec<_>>(),
                 "truth": joints.iter().map(|j| j.to_array()).collect::<Vec<_>>(),
                 "confidence": t.joints.iter().map(|j| format!("{:?}", j.confidence)).collect::<Vec<_>>(),
+                "fit": [t.fit.inliers, t.fit.outside, t.fit.mean_residual_m, t.fit.outliers],
             });
             writeln!(out, "{line}")?;
         }

@@ -50,6 +50,9 @@ pub struct EvalReport {
     pub in_view_frames: usize,
     /// Of those, the share with every joint tracked or inferred, %.
     pub all_joints_pct: f64,
+    /// Frames with a person whose fit had lost them: every joint reported not tracked
+    /// ([`crate::TrackerSettings::lost_inliers`]); their joints count in no error above.
+    pub lost_frames: usize,
     /// Fits (re)started from the extrema.
     pub starts: usize,
     /// Time per frame (segmentation and fit), ms; without the searches for the person's
@@ -69,6 +72,7 @@ pub struct Evaluation {
     tracked_frames: usize,
     in_view: usize,
     all_joints: usize,
+    lost_frames: usize,
     errors: Vec<Vec<f64>>,
     tracked: Vec<usize>,
     inferred: Vec<usize>,
@@ -146,6 +150,13 @@ impl Evaluation {
             return;
         };
         self.tracked_frames += 1;
+        if tracked
+            .joints
+            .iter()
+            .all(|j| j.confidence == Confidence::NotTracked)
+        {
+            self.lost_frames += 1;
+        }
         let mut all = true;
         for (k, j) in tracked.joints.iter().enumerate() {
             match j.confidence {
@@ -181,6 +192,7 @@ impl Evaluation {
             trunk_mean_mm: Summary::of(&trunk).mean,
             in_view_frames: self.in_view,
             all_joints_pct: 100.0 * self.all_joints as f64 / self.in_view.max(1) as f64,
+            lost_frames: self.lost_frames,
             starts,
             time_mean_ms: time.mean,
             time_p95_ms: time.p95,

@@ -329,3 +329,88 @@ fn the_trackers_body_poses_as_the_body_crate_does() {
         assert!(a.distance(*b) < 1e-4, "joint {k}: {a} vs {b}");
     }
 }
+
+#[test]
+fn a_person_upside_down_is_reported_lost_not_tracked_wrong() {
+    // A handstand after standing (the dance's cartwheel, held): the body's start and its
+    // model assume a person upright, and a body fitted upright to one upside down puts its
+    // legs in their arms. Such a frame must come out not tracked (the gate then holds the
+    // last good skeleton), never as a confident skeleton far from the truth.
+    use fitroom_motion::filter::{FrameGate, RejectReason};
+    let body = body();
+    let mut tracker = tracker(&body);
+    let gate = FrameGate::new();
+    let spot = Vec3::new(0.0, -0.8, 2.5);
+    let locals = body.locals(ARMS_OUT, 0.3);
+    let (skin, truth) = body.posed(&locals, spot);
+    let room = |skin: Vec<Vec3>| scene(vec![(skin, Label::Body)], &body.model.triangles);
+    let mut time = 0.0;
+    for i in 0..10 {
+        let tracked = tracker
+            .track(&render(&room(skin.clone()), 40 + i, time))
+            .expect("the person standing is seen");
+        time += 1.0 / 30.0;
+        assert_eq!(
+            tracked.joints[KinectJoint::HipCenter.index()].confidence,
+            Confidence::Tracked,
+            "standing, frame {i}"
+        );
+    }
+    // Turned half round the sensor's axis about a point above the floor by the body's
+    // height, so the head rests on the floor.
+    let top = skin.iter().map(|p| p.y).fold(f32::MIN, f32::max);
+    let pivot = Vec3::new(spot.x, (spot.y + top) / 2.0, spot.z);
+    let flip = |p: &Vec3| Vec3::new(2.0 * pivot.x - p.x, 2.0 * pivot.y - p.y, p.z);
+    let (upside_down, truth_down): (Vec<Vec3>, Vec<Vec3>) = (
+        skin.iter().map(flip).collect(),
+        truth.iter().map(flip).collect(),
+    );
+    let mut lost = 0;
+    for i in 0..20 {
+        let frame = render(&room(upside_down.clone()), 60 + i, time);
+        time += 1.0 / 30.0;
+        let Some(tracked) = tracker.track(&frame) else {
+            continue;
+        };
+        let hip = tracked.joints[KinectJoint::HipCenter.index()].confidence;
+        if hip == Confidence::NotTracked {
+            lost += 1;
+            assert!(
+                tracked
+                    .joints
+                    .iter()
+                    .all(|j| j.confidence == Confidence::NotTracked),
+                "frame {i}: a lost frame has no joint tracked"
+            );
+            assert_eq!(
+                gate.classify(&tracked.sensor_frame(time, i)),
+                Some(RejectReason::MissingHip),
+                "frame {i}: the gate holds the last good skeleton"
+            );
+            continue;
+        }
+        let found: Vec<Vec3> = tracked.joints.iter().map(|j| j.position).collect();
+        let (all, trunk) = errors(&found, &truth_down);
+        assert!(
+            all < 0.15 && trunk < 0.1,
+            "frame {i}: tracked upside down with mean error {all:.3} m, trunk {trunk:.3} m, \
+             {:.0} % of the points near the body",
+            tracked.fit.inliers * 100.0
+        );
+    }
+    println!("upside down: {lost} of 20 frames reported lost");
+    // Upright again, it is tracked again within a second.
+    let back = (0..30).position(|i| {
+        let frame = render(&room(skin.clone()), 90 + i, time);
+        time += 1.0 / 30.0;
+        tracker.track(&frame).is_some_and(|t| {
+            let found: Vec<Vec3> = t.joints.iter().map(|j| j.position).collect();
+            t.joints[KinectJoint::HipCenter.index()].confidence == Confidence::Tracked
+                && errors(&found, &truth).1 < 0.05
+        })
+    });
+    assert!(
+        back.is_some(),
+        "not tracked again within 1 s of standing up"
+    );
+}
