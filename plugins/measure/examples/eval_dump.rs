@@ -72,23 +72,16 @@ fn settings() -> TrackerSettings {
         s.turn_check_every = v as usize;
     }
     // The settings in metres or weights, each overridden by its variable if set.
-    let f = &mut s.fit;
     for (key, field) in [
-        ("DAMP", &mut f.damping),
-        ("FREE", &mut f.free_space_weight),
-        ("HUBER", &mut f.huber_m),
-        ("SCALE_STIFF", &mut f.scale_stiffness),
-        ("OUTLIER", &mut f.outlier_m),
-        ("ARM_FRONT_CAP", &mut f.arm_front_cap_m),
-        ("CLOTH_GAP", &mut f.cloth_gap_weight),
-        ("CONTACT", &mut f.contact_weight),
-        ("CONTACT_TOL", &mut f.contact_tolerance_m),
-    ] {
-        if let Some(v) = env(key) {
-            *field = v;
-        }
-    }
-    for (key, field) in [
+        ("DAMP", &mut s.fit.damping),
+        ("FREE", &mut s.fit.free_space_weight),
+        ("HUBER", &mut s.fit.huber_m),
+        ("SCALE_STIFF", &mut s.fit.scale_stiffness),
+        ("OUTLIER", &mut s.fit.outlier_m),
+        ("ARM_FRONT_CAP", &mut s.fit.arm_front_cap_m),
+        ("CLOTH_GAP", &mut s.fit.cloth_gap_weight),
+        ("CONTACT", &mut s.fit.contact_weight),
+        ("CONTACT_TOL", &mut s.fit.contact_tolerance_m),
         ("CARRY_TURN", &mut s.carry_turn),
         ("TURN_MARGIN", &mut s.turn_margin),
         ("SLEEVE_SEEN", &mut s.sleeve_seen_m),
