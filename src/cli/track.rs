@@ -249,6 +249,9 @@ pub struct RecordingEval {
     /// The median inward step seen in the outline of the person's hanging upper arms, where a
     /// short sleeve ends, mm (`fitroom_tracker::sleeve`; `None`: too few hanging arms seen).
     pub sleeve_step_mm: Option<f64>,
+    /// What went wrong in the last search for the person's build, if anything did (the body
+    /// tracked before it is kept, or the clothed build worn without the body under it).
+    pub build_error: Option<String>,
 }
 
 fn print_eval(r: &TrackEvalReport) {
@@ -274,6 +277,9 @@ fn print_eval(r: &TrackEvalReport) {
             d.lost_frames,
             d.starts
         );
+        if let Some(e) = &d.build_error {
+            println!("  the person's build: {e}");
+        }
     }
     let o = &r.overall;
     println!(
@@ -394,6 +400,7 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
                 .as_ref()
                 .map(|e| f64::from(e.clothing_m) * 100.0),
             sleeve_step_mm: tracker.sleeve_step_m().map(|s| f64::from(s) * 1000.0),
+            build_error: tracker.shape_error.clone(),
         });
     }
     if let Some(png) = png {

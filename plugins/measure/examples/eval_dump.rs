@@ -224,6 +224,9 @@ fn main() -> Result<(), Error> {
     if let Some(step) = tracker.sleeve_step_m() {
         eprintln!("sleeve step (median): {:.1} mm", step * 1000.0);
     }
+    if let Some(e) = &tracker.shape_error {
+        eprintln!("build: {e}");
+    }
     if let Some(e) = &tracker.shape {
         eprintln!(
             "build: gender {:.2} weight {:.2} muscle {:.2} height {:.2} proportions {:.2} (cost {:.2} mm, default {:.2} mm, {} bodies tried), clothing {:.1} cm",

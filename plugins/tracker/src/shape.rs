@@ -145,6 +145,9 @@ pub struct Estimate {
     /// The clothing layer the body wears ([`TrackBody::clothe`]), metres: 0 or
     /// [`TrackerSettings::clothing_m`].
     pub clothing_m: f32,
+    /// Why the body under the clothing layer ([`BuildFit::under_clothes`]) could not be
+    /// fitted, if it could not: the clothed fit's own body is worn instead.
+    pub under_clothes_error: Option<String>,
 }
 
 #[derive(Debug, thiserror::Error)]
@@ -265,6 +268,7 @@ fn search(model: &BodyModel, fits: &Refits, t: f32) -> Result<Estimate, ShapeSea
         cost_m: Some(best),
         evaluations,
         clothing_m: t,
+        under_clothes_error: None,
     })
 }
 
@@ -324,26 +328,46 @@ pub fn estimate_with(
     }
     let fitted = |t: f32| fit.fit(model, snapshots, t).map_err(ShapeSearchError::Fit);
     let t = settings.clothing_m;
-    // The body under the layer: a failed second fit leaves the first, which is good.
-    let clothe = |clothed: BuildFitted, evaluations: usize| {
-        let under = fit.under_clothes(model, snapshots, t).ok().flatten();
-        let evaluations = evaluations + usize::from(under.is_some());
-        (under.unwrap_or(clothed.shape), t, evaluations)
+    let bare = |bare: BuildFitted, evaluations| Clothed {
+        shape: bare.shape,
+        clothing_m: 0.0,
+        evaluations,
+        under_error: None,
     };
-    let (shape, clothing_m, evaluations) = match sleeves {
-        _ if t <= 0.0 => (fitted(0.0)?.shape, 0.0, 1),
-        Sleeves::Bare => (fitted(0.0)?.shape, 0.0, 1),
-        Sleeves::Seen => clothe(fitted(t)?, 1),
-        Sleeves::Unsure => {
-            let bare = fitted(0.0)?;
-            let clothed = fitted(t)?;
-            if clothed.cost < bare.cost * (1.0 - f64::from(settings.clothing_margin)) {
-                clothe(clothed, 2)
-            } else {
-                (bare.shape, 0.0, 2)
-            }
+    // The body under the layer: a failed second fit leaves the first, which is good.
+    let clothe =
+        |clothed: BuildFitted, evaluations: usize| match fit.under_clothes(model, snapshots, t) {
+            Ok(under) => Clothed {
+                evaluations: evaluations + usize::from(under.is_some()),
+                shape: under.unwrap_or(clothed.shape),
+                clothing_m: t,
+                under_error: None,
+            },
+            Err(e) => Clothed {
+                shape: clothed.shape,
+                clothing_m: t,
+                evaluations: evaluations + 1,
+                under_error: Some(e),
+            },
+        };
+    let found = if t <= 0.0 || sleeves == Sleeves::Bare {
+        bare(fitted(0.0)?, 1)
+    } else if sleeves == Sleeves::Seen {
+        clothe(fitted(t)?, 1)
+    } else {
+        let (b, clothed) = (fitted(0.0)?, fitted(t)?);
+        if clothed.cost < b.cost * (1.0 - f64::from(settings.clothing_margin)) {
+            clothe(clothed, 2)
+        } else {
+            bare(b, 2)
         }
     };
+    let Clothed {
+        shape,
+        clothing_m,
+        evaluations,
+        under_error,
+    } = found;
     let mut body = TrackBody::new(model, &model.shaped(&shape)?.positions)?;
     body.clothe(clothing_m);
     Ok(Estimate {
@@ -354,5 +378,14 @@ pub fn estimate_with(
         cost_m: None,
         evaluations,
         clothing_m,
+        under_clothes_error: under_error,
     })
+}
+
+/// A build found by [`estimate_with`], bare or under the layer.
+struct Clothed {
+    shape: Shape,
+    clothing_m: f32,
+    evaluations: usize,
+    under_error: Option<String>,
 }

@@ -304,7 +304,8 @@ pub struct Tracker {
     sleeve_steps: Vec<f32>,
     /// The build estimated for the person tracked, and its search's report.
     pub shape: Option<Estimate>,
-    /// Why the last search for a build failed (the body kept), if it did.
+    /// Why the last search for a build failed (the body kept), or what part of it did (the
+    /// body under the clothing: the clothed build worn), if anything did.
     pub shape_error: Option<String>,
     /// The time of the search for the build, ms, if one ran in the last frame tracked.
     pub search_ms: Option<f64>,
@@ -520,7 +521,10 @@ impl Tracker {
                 return;
             }
         };
-        self.shape_error = None;
+        self.shape_error = estimate
+            .under_clothes_error
+            .as_ref()
+            .map(|e| format!("the body under the clothing: {e}; the clothed build is worn"));
         if estimate.sized {
             // The body is the person's size: scale 1 from now on, the soles where they were.
             if let Some(pose) = &mut self.pose {

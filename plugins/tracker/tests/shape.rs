@@ -8,10 +8,10 @@ mod common;
 use std::sync::Arc;
 
 use common::{ARMS_OUT, REACH_AND_STEP, render, scene, shaped_body};
-use fitroom_body::Shape;
+use fitroom_body::{BodyModel, Shape};
 use fitroom_depth::synthetic::Label;
 use fitroom_tracker::eval::TRUNK;
-use fitroom_tracker::{TrackBody, Tracker, TrackerSettings};
+use fitroom_tracker::{BuildFit, BuildFitted, Snapshot, TrackBody, Tracker, TrackerSettings};
 use glam::Vec3;
 
 /// Mean trunk error (m) over the frames after `from` of the person of `shape` moving their
@@ -210,11 +210,25 @@ fn a_moment_away_keeps_the_build_and_the_next_person_starts_from_the_default_bod
 /// clavicles and upper arms' skin `layer_m` out along the skin's normals (a shirt's surface,
 /// made here from the body crate's own skinning, not the tracker's capsules), is clothed.
 fn found_clothed(layer_m: f32, seed: u64) -> f32 {
+    let tracker = tracked_in_layer(layer_m, seed, None);
+    tracker
+        .shape
+        .as_ref()
+        .expect("the build estimated within a second")
+        .clothing_m
+}
+
+/// A tracker (its build fitted by `build_fit`, else by its own search) after a second of
+/// the default body moving its arms in a layer `layer_m` thick (as [`found_clothed`]).
+fn tracked_in_layer(layer_m: f32, seed: u64, build_fit: Option<Arc<dyn BuildFit>>) -> Tracker {
     let person = shaped_body(&Shape::default());
     let model = Arc::new(common::model());
     let covered = fitroom_tracker::model::clothed_vertices(&model);
     let mut tracker =
         Tracker::estimating(model.clone(), TrackerSettings::default()).expect("a tracker");
+    if let Some(fit) = build_fit {
+        tracker = tracker.with_build_fit(fit);
+    }
     for k in 0..30 {
         let share = 0.3 + 0.3 * (k as f32 / 10.0).sin();
         let (mut skin, _) =
@@ -233,10 +247,66 @@ fn found_clothed(layer_m: f32, seed: u64) -> f32 {
         tracker.track(&frame).expect("tracked");
     }
     tracker
-        .shape
-        .as_ref()
-        .expect("the build estimated within a second")
-        .clothing_m
+}
+
+/// A build fitter that finds a given build, cheaper under the clothing layer, and fails
+/// (or not) to find the body under it.
+struct UnderFails {
+    clothed: Shape,
+    under: Result<Option<Shape>, String>,
+}
+
+impl BuildFit for UnderFails {
+    fn fit(&self, _: &BodyModel, _: &[Snapshot], clothing_m: f32) -> Result<BuildFitted, String> {
+        Ok(BuildFitted {
+            shape: self.clothed.clone(),
+            cost: if clothing_m > 0.0 { 1.0 } else { 2.0 },
+        })
+    }
+
+    fn under_clothes(
+        &self,
+        _: &BodyModel,
+        _: &[Snapshot],
+        _: f32,
+    ) -> Result<Option<Shape>, String> {
+        self.under.clone()
+    }
+}
+
+/// When the body under a shirt cannot be fitted, the clothed build is worn and the tracker
+/// says why (it used to be dropped without a word); when it can, it is worn.
+#[test]
+fn a_failed_fit_of_the_body_under_the_clothes_is_reported_and_the_clothed_build_worn() {
+    let clothed = Shape {
+        weight: 0.8,
+        ..Shape::default()
+    };
+    let under = Shape {
+        weight: 0.6,
+        ..Shape::default()
+    };
+    let failing = UnderFails {
+        clothed: clothed.clone(),
+        under: Err("the fit did not converge".to_string()),
+    };
+    let tracker = tracked_in_layer(0.03, 7, Some(Arc::new(failing)));
+    let estimate = tracker.shape.as_ref().expect("a build adopted");
+    assert!(estimate.clothing_m > 0.0, "the layer taken");
+    assert_eq!(estimate.shape, clothed, "the clothed fit's build worn");
+    let said = tracker.shape_error.as_deref().unwrap_or("");
+    assert!(
+        said.contains("under the clothing") && said.contains("did not converge"),
+        "the failure reported: {said:?}"
+    );
+    let fitting = UnderFails {
+        clothed,
+        under: Ok(Some(under.clone())),
+    };
+    let tracker = tracked_in_layer(0.03, 7, Some(Arc::new(fitting)));
+    let estimate = tracker.shape.as_ref().expect("a build adopted");
+    assert_eq!(estimate.shape, under, "the body under the clothes worn");
+    assert_eq!(tracker.shape_error, None);
 }
 
 /// A shirt's surface stands off the skin, and a body fitted to it puts the joints of the
