@@ -16,7 +16,6 @@ use fitroom_depth::{DepthFrame, HEIGHT, WIDTH};
 use glam::Vec3;
 use serde::Serialize;
 
-use crate::floor::Plane;
 use crate::segment::Segmentation;
 
 /// Sampling step of the graph, pixels.
@@ -120,8 +119,7 @@ pub fn geodesic_extrema(frame: &DepthFrame, person: &Segmentation) -> Vec<Extrem
         });
         sources.push(far);
     }
-    label(&mut found, person.centroid, &person.floor);
-    unname_unlikely_hands(&mut found, person);
+    label(&mut found, person);
     for e in &mut found {
         let node = (usize::from(e.pixel[1]) / STEP) * W + usize::from(e.pixel[0]) / STEP;
         let (radius, depth) = part_size(e.part);
@@ -209,7 +207,8 @@ fn dijkstra(points: &[Option<Vec3>], sources: &[usize], distance: &mut [f32], li
 /// Names the extremities: the feet are the two lowest near the floor, the head the upper end
 /// nearest the centre along the surface, the hands the rest (left and right by the side of the body they are on:
 /// a person facing the sensor has their left at -X).
-fn label(found: &mut [Extremum], centre: Vec3, floor: &Plane) {
+fn label(found: &mut [Extremum], person: &Segmentation) {
+    let (centre, floor) = (person.centroid, &person.floor);
     let height = |e: &Extremum| floor.height(e.position);
     let mut order: Vec<usize> = (0..found.len()).collect();
     order.sort_by(|&a, &b| height(&found[a]).total_cmp(&height(&found[b])));
@@ -253,7 +252,7 @@ fn label(found: &mut [Extremum], centre: Vec3, floor: &Plane) {
         found[h].part = Part::Head;
     }
     let mut hands: Vec<usize> = (0..found.len())
-        .filter(|&i| found[i].part == Part::Other)
+        .filter(|&i| found[i].part == Part::Other && could_be_hand(&found[i], person))
         .collect();
     hands.sort_by(|&a, &b| found[a].position.x.total_cmp(&found[b].position.x));
     match hands.as_slice() {
@@ -283,26 +282,20 @@ const HAND_NEAR_HEIGHTS: std::ops::RangeInclusive<f32> = 0.33..=0.6;
 /// before the spine joint, which lies behind the centroid of what is seen).
 const HAND_BEFORE_M: f32 = 0.2;
 
-/// Takes the hand's name from an end that cannot be a hand: a hand is an arm's length round
-/// the body from its centre, unless it touches the body, and then it hangs at the hips or is
-/// held before the trunk. With the arms hanging against the sides (or in a T-shirt, whose
+/// Whether end `e` can be a hand, for [`label`] to name: a hand is an arm's length round the
+/// body from its centre, unless it touches the body, and then it hangs at the hips or is held
+/// before the trunk. With the arms hanging against the sides (or in a T-shirt, whose
 /// sleeves join the arms to the trunk) the hands are no ends, and the ends named for them are
 /// the shoulders' corners (0.70-0.84 of the height) or the knees (0.23-0.30). On the first
 /// frames of the 90 bare and T-shirt recordings of the acceptance set, the 45 ends named for
 /// hands 20 cm or more from either hand all lay so (at most 16 cm before the spine joint), and
 /// of the 135 within 20 cm only a runner's 3 hands before the chest (39-46 cm before it).
-fn unname_unlikely_hands(found: &mut [Extremum], person: &Segmentation) {
+fn could_be_hand(e: &Extremum, person: &Segmentation) -> bool {
     // (A person lower than half a metre, lying or rolled up, is measured against that.)
     let height = person.top_m.max(0.5);
-    for e in found {
-        if matches!(e.part, Part::HandLeft | Part::HandRight)
-            && e.geodesic_m < HAND_NEAR * height
-            && !HAND_NEAR_HEIGHTS.contains(&(person.floor.height(e.position) / height))
-            && person.centroid.z - e.position.z < HAND_BEFORE_M
-        {
-            e.part = Part::Other;
-        }
-    }
+    e.geodesic_m >= HAND_NEAR * height
+        || HAND_NEAR_HEIGHTS.contains(&(person.floor.height(e.position) / height))
+        || person.centroid.z - e.position.z >= HAND_BEFORE_M
 }
 
 /// An `f32` ordered for the heap (distances are finite and not NaN).

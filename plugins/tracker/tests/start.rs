@@ -66,7 +66,7 @@ fn first_frame(turns: Turns, start_arms_hanging: bool, z: f32, seed: u64) -> (f3
 /// (an elbow, a hip) pulled the arm into the trunk and the trunk askew with it (CMU 07_06's
 /// small woman: both arms 20-50 cm off for the first 20 frames, and one arm never found
 /// again). The start also tries the arms hanging, not pulled to the hands' ends; and the
-/// extrema no longer name such an end a hand (`extrema.rs`, `unname_unlikely_hands`), so a
+/// extrema no longer name such an end a hand (`extrema.rs`, `could_be_hand`), so a
 /// start pulled to the ends alone (which put these arms 25 cm or more off) finds them too.
 #[test]
 fn a_person_first_seen_with_the_hands_by_the_thighs_is_started_with_them_there() {
