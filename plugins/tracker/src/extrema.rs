@@ -205,8 +205,9 @@ fn dijkstra(points: &[Option<Vec3>], sources: &[usize], distance: &mut [f32], li
 }
 
 /// Names the extremities: the feet are the two lowest near the floor, the head the upper end
-/// nearest the centre along the surface, the hands the rest (left and right by the side of the body they are on:
-/// a person facing the sensor has their left at -X).
+/// nearest the centre along the surface, the hands the outermost two of the rest that can be
+/// hands ([`could_be_hand`]; left and right by the side of the body they are on: a person
+/// facing the sensor has their left at -X).
 fn label(found: &mut [Extremum], person: &Segmentation) {
     let (centre, floor) = (person.centroid, &person.floor);
     let height = |e: &Extremum| floor.height(e.position);
