@@ -228,18 +228,12 @@ pub struct TrackEvalReport {
     pub recordings: Vec<RecordingEval>,
 }
 
-/// One recording's headline figures.
+/// One recording's figures: its evaluation, and what the tracker found of the person.
 #[derive(Debug, Serialize)]
 pub struct RecordingEval {
     pub dump: String,
-    pub frames: usize,
-    pub mean_mm: f64,
-    pub trunk_mean_mm: f64,
-    pub p95_mm: f64,
-    pub all_joints_pct: f64,
-    /// Frames the tracker reported the person lost (every joint not tracked).
-    pub lost_frames: usize,
-    pub starts: usize,
+    #[serde(flatten)]
+    pub report: EvalReport,
     /// The person's height as the tracker sized them in the last frame tracked, cm (the
     /// recording's own is in its `body.json`, `stature_cm`).
     pub stature_cm: Option<f64>,
@@ -256,6 +250,7 @@ pub struct RecordingEval {
 
 fn print_eval(r: &TrackEvalReport) {
     for d in &r.recordings {
+        let e = &d.report;
         let height = d
             .stature_cm
             .map_or(String::new(), |h| format!(", sized {h:.1} cm tall"));
@@ -269,13 +264,13 @@ fn print_eval(r: &TrackEvalReport) {
             "{}: {} frames, mean {:.0} mm (trunk {:.0}), p95 {:.0} mm, every joint tracked or \
              inferred in {:.1} % of frames in view, {} lost, {} starts{height}{clothing}{sleeve}",
             d.dump,
-            d.frames,
-            d.mean_mm,
-            d.trunk_mean_mm,
-            d.p95_mm,
-            d.all_joints_pct,
-            d.lost_frames,
-            d.starts
+            e.frames,
+            e.mean_mm,
+            e.trunk_mean_mm,
+            e.p95_mm,
+            e.all_joints_pct,
+            e.lost_frames,
+            e.starts
         );
         if let Some(e) = &d.build_error {
             println!("  the person's build: {e}");
@@ -384,16 +379,9 @@ fn eval(dumps: &[PathBuf], body: &BodyArg, png: Option<&Path>) -> Result<TrackEv
             }
         }
         starts += tracker.starts;
-        let r = one.report(tracker.starts);
         recordings.push(RecordingEval {
             dump: dump.display().to_string(),
-            frames: r.frames,
-            mean_mm: r.mean_mm,
-            trunk_mean_mm: r.trunk_mean_mm,
-            p95_mm: r.p95_mm,
-            all_joints_pct: r.all_joints_pct,
-            lost_frames: r.lost_frames,
-            starts: r.starts,
+            report: one.report(tracker.starts),
             stature_cm,
             clothing_cm: tracker
                 .shape
