@@ -17,7 +17,9 @@
 //!   without the measurement's fit);
 //!   `START_PULLED=1`: a start pulls the arms to the hands' ends only (no hanging arms tried);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
-//!   the wall behind the person not taken out; `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
+//!   the wall behind the person not taken out; `DENOISE`, `BUILD_DENOISE` (pixels about each
+//!   reading averaged, by the tracker and by the build's fit; 0: none);
+//!   `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
 //!   `SNAPS`, `LOOKS` (looks at the build per person), `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `SLEEVE_SEEN`, `SLEEVE_BARE` (the sleeves' steps that decide the layer, metres), `CONTACT`, `CONTACT_TOL` (the weight and tolerance of the forearms' contact with the trunk), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
 //!   clothing layer tried, metres; 0: none), `TURN_CHECK` (frames between checks of a body
 //!   turned away; 0: none), `LOST` (the share of points near the body under which a frame is
@@ -99,6 +101,9 @@ fn settings() -> TrackerSettings {
     s.recover_folded_at_rest = std::env::var("FOLDED_AT_REST").is_ok();
     s.segment.wall = std::env::var("NO_WALL").is_err();
     s.scale = env("SCALE");
+    if let Some(v) = env("DENOISE") {
+        s.denoise_px = v as usize;
+    }
     s.recover = std::env::var("NO_RECOVER").is_err();
     s
 }
@@ -136,6 +141,9 @@ fn main() -> Result<(), Error> {
         }
         if let Some(v) = env("UNDER_OUTSIDE") {
             build.under_outside_weight = v;
+        }
+        if let Some(v) = env("BUILD_DENOISE") {
+            build.denoise_px = v as usize;
         }
         Tracker::estimating(std::sync::Arc::new(model.clone()), settings())?
             .with_build_fit(std::sync::Arc::new(build))

@@ -220,6 +220,59 @@ fn the_body_fit_under_a_layer_of_clothing_finds_the_body_under_it() {
     }
 }
 
+/// The layer the tracker takes with the measurement's body fit (`estimate_with`, the app's and
+/// the CLI's way): a person moving their arms in a 3 cm layer (the skin of the trunk,
+/// clavicles and upper arms moved out along its normals, a shirt's surface) is found clothed,
+/// the same person bare is not. (The tracker's own macro search is tested on the same scene in
+/// `fitroom_tracker`'s `shape` tests.)
+#[test]
+fn the_tracker_with_the_body_fit_finds_a_layer_of_clothing_only_on_a_clothed_person() {
+    let model = model();
+    let prior = Arc::new(ShapePrior::shipped().expect("the shipped prior"));
+    let person = common::shaped_body(&Shape::default());
+    let covered = fitroom_tracker::model::clothed_vertices(&model);
+    let layer_found = |layer_m: f32, seed: u64| -> f32 {
+        let mut tracker = Tracker::estimating(model.clone(), TrackerSettings::default())
+            .expect("a tracker")
+            .with_build_fit(Arc::new(TrackedBuild::new(prior.clone())));
+        for k in 0..30 {
+            let share = 0.3 + 0.3 * (k as f32 / 10.0).sin();
+            let (mut skin, _) = person.posed(
+                &person.locals(common::ARMS_OUT, share),
+                glam::Vec3::new(0.0, -0.8, 2.6),
+            );
+            let normals = fitroom_body::compute_normals(&skin, &person.model.triangles);
+            for ((v, n), &on) in skin.iter_mut().zip(&normals).zip(&covered) {
+                if on {
+                    *v += *n * layer_m;
+                }
+            }
+            let frame = common::render(
+                &common::scene(vec![(skin, Label::Body)], &person.model.triangles),
+                k as u64 + seed,
+                k as f64 / 30.0,
+            );
+            tracker.track(&frame).expect("tracked");
+        }
+        tracker
+            .shape
+            .as_ref()
+            .expect("the build estimated within a second")
+            .clothing_m
+    };
+    for seed in [7, 107] {
+        assert!(
+            layer_found(0.03, seed) > 0.0,
+            "seed {seed}: the clothed person found bare"
+        );
+        assert_eq!(
+            layer_found(0.0, seed),
+            0.0,
+            "seed {seed}: the bare person found clothed"
+        );
+    }
+}
+
 /// A jump's crouch: thighs raised, knees bent deep, the trunk bowed forward.
 const CROUCH: common::Turns = &[
     ("thigh_l", glam::Vec3::X, -100.0),

@@ -9,6 +9,7 @@
 #![forbid(unsafe_code)]
 
 pub mod bodyparts;
+pub mod denoise;
 pub mod draw;
 pub mod eval;
 pub mod extrema;

@@ -16,6 +16,7 @@ use glam::{Quat, Vec3};
 use serde::Serialize;
 
 use crate::bodyparts::{Forest, PartScratch, Proposal, ProposalSettings, propose};
+use crate::denoise::surface_depth_m;
 use crate::fit::{FitSettings, FitStats, Fitter, Observation};
 use crate::model::{ModelError, Pose, Posed, TrackBody};
 use crate::segment::{SegmentSettings, Segmentation, Segmenter};
@@ -40,6 +41,9 @@ pub struct TrackerSettings {
     pub fit: FitSettings,
     /// Points of the person sampled per frame for the fit (about).
     pub points: usize,
+    /// Each sampled point's depth is the mean of the person's readings on its surface within
+    /// this many pixels ([`crate::denoise`]; 2: a 5 x 5 window); 0: the reading alone.
+    pub denoise_px: usize,
     /// Fit iterations per frame when following, and when starting.
     pub iterations: usize,
     pub start_iterations: usize,
@@ -119,6 +123,7 @@ impl Default for TrackerSettings {
             segment: SegmentSettings::default(),
             fit: FitSettings::default(),
             points: 1200,
+            denoise_px: 2,
             iterations: 8,
             start_iterations: 30,
             min_inliers: 0.6,
@@ -745,7 +750,8 @@ impl Tracker {
         Some(self.fit(frame, &person, pose, &[], iterations))
     }
 
-    /// About [`TrackerSettings::points`] of the person's readings on a regular grid.
+    /// About [`TrackerSettings::points`] of the person's readings on a regular grid, each
+    /// with its noise averaged out ([`TrackerSettings::denoise_px`]).
     fn sample_points(&mut self, frame: &DepthFrame, person: &Segmentation) {
         let step = ((person.pixels as f32 / self.settings.points.max(1) as f32)
             .sqrt()
@@ -755,10 +761,11 @@ impl Tracker {
         self.points.clear();
         for y in (y0..=y1.min(HEIGHT - 1)).step_by(step) {
             for x in (x0..=x1.min(WIDTH - 1)).step_by(step) {
-                let k = y * WIDTH + x;
-                let mm = frame.depth_mm[k];
-                if person.mask[k] && mm > 0 {
-                    let z = f32::from(mm) / 1000.0;
+                if !person.mask[y * WIDTH + x] {
+                    continue;
+                }
+                let radius = self.settings.denoise_px;
+                if let Some(z) = surface_depth_m(&frame.depth_mm, &person.mask, x, y, radius) {
                     self.points
                         .push(frame.camera.unproject(x as f32, y as f32, z));
                 }
