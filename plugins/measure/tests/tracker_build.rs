@@ -229,29 +229,11 @@ fn the_body_fit_under_a_layer_of_clothing_finds_the_body_under_it() {
 fn the_tracker_with_the_body_fit_finds_a_layer_of_clothing_only_on_a_clothed_person() {
     let model = model();
     let prior = Arc::new(ShapePrior::shipped().expect("the shipped prior"));
-    let person = common::shaped_body(&Shape::default());
-    let covered = fitroom_tracker::model::clothed_vertices(&model);
     let layer_found = |layer_m: f32, seed: u64| -> f32 {
         let mut tracker = Tracker::estimating(model.clone(), TrackerSettings::default())
             .expect("a tracker")
             .with_build_fit(Arc::new(TrackedBuild::new(prior.clone())));
-        for k in 0..30 {
-            let share = 0.3 + 0.3 * (k as f32 / 10.0).sin();
-            let (mut skin, _) = person.posed(
-                &person.locals(common::ARMS_OUT, share),
-                glam::Vec3::new(0.0, -0.8, 2.6),
-            );
-            let normals = fitroom_body::compute_normals(&skin, &person.model.triangles);
-            for ((v, n), &on) in skin.iter_mut().zip(&normals).zip(&covered) {
-                if on {
-                    *v += *n * layer_m;
-                }
-            }
-            let frame = common::render(
-                &common::scene(vec![(skin, Label::Body)], &person.model.triangles),
-                k as u64 + seed,
-                k as f64 / 30.0,
-            );
+        for frame in common::arms_moving_in_a_layer(layer_m, seed) {
             tracker.track(&frame).expect("tracked");
         }
         tracker

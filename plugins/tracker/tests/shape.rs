@@ -237,28 +237,12 @@ fn tracked_in_layer(
     build_fit: Option<Arc<dyn BuildFit>>,
     settings: TrackerSettings,
 ) -> Tracker {
-    let person = shaped_body(&Shape::default());
     let model = Arc::new(common::model());
-    let covered = fitroom_tracker::model::clothed_vertices(&model);
     let mut tracker = Tracker::estimating(model.clone(), settings).expect("a tracker");
     if let Some(fit) = build_fit {
         tracker = tracker.with_build_fit(fit);
     }
-    for k in 0..30 {
-        let share = 0.3 + 0.3 * (k as f32 / 10.0).sin();
-        let (mut skin, _) =
-            person.posed(&person.locals(ARMS_OUT, share), Vec3::new(0.0, -0.8, 2.6));
-        let normals = fitroom_body::compute_normals(&skin, &person.model.triangles);
-        for ((v, n), &on) in skin.iter_mut().zip(&normals).zip(&covered) {
-            if on {
-                *v += *n * layer_m;
-            }
-        }
-        let frame = render(
-            &scene(vec![(skin, Label::Body)], &person.model.triangles),
-            k as u64 + seed,
-            k as f64 / 30.0,
-        );
+    for frame in common::arms_moving_in_a_layer(layer_m, seed) {
         tracker.track(&frame).expect("tracked");
     }
     tracker

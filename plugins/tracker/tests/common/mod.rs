@@ -131,3 +131,30 @@ pub const TURN_AND_CROSS: Turns = &[
     ("upperarm_l", Vec3::Y, -45.0),
     ("lowerarm_r", Vec3::X, -90.0),
 ];
+
+/// A second (30 frames) of the default body moving its arms out and back, 2.6 m away, with
+/// its trunk's, clavicles' and upper arms' skin `layer_m` out along the skin's normals (a
+/// shirt's surface, made from the body crate's own skinning, not the tracker's capsules);
+/// noise from `seed`.
+pub fn arms_moving_in_a_layer(layer_m: f32, seed: u64) -> Vec<DepthFrame> {
+    let person = shaped_body(&fitroom_body::Shape::default());
+    let covered = fitroom_tracker::model::clothed_vertices(&person.model);
+    (0..30)
+        .map(|k| {
+            let share = 0.3 + 0.3 * (k as f32 / 10.0).sin();
+            let (mut skin, _) =
+                person.posed(&person.locals(ARMS_OUT, share), Vec3::new(0.0, -0.8, 2.6));
+            let normals = fitroom_body::compute_normals(&skin, &person.model.triangles);
+            for ((v, n), &on) in skin.iter_mut().zip(&normals).zip(&covered) {
+                if on {
+                    *v += *n * layer_m;
+                }
+            }
+            render(
+                &scene(vec![(skin, Label::Body)], &person.model.triangles),
+                k as u64 + seed,
+                k as f64 / 30.0,
+            )
+        })
+        .collect()
+}
