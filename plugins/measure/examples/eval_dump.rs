@@ -18,7 +18,10 @@
 //!   `START_PULLED=1`: a start pulls the arms to the hands' ends only (no hanging arms tried);
 //!   `NO_RECOVER=1`: no second hypothesis for limbs the fit seems to have lost; `NO_WALL=1`:
 //!   the wall behind the person not taken out; `DENOISE`, `BUILD_DENOISE` (pixels about each
-//!   reading averaged, by the tracker and by the build's fit; 0: none);
+//!   reading averaged, by the tracker and by the build's fit; 0: none); `SKIRT_FORK`,
+//!   `SKIRT_CREASE` (a skirt's least length below the hip joints, 0: none looked for; the
+//!   crease that parts two legs, metres), `SKIRT_WIDTH`, `SKIRT_FLARE` (the zone's half-width
+//!   in half hip spacings, its flare per metre down);
 //!   `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
 //!   `SNAPS`, `LOOKS` (looks at the build per person), `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `SLEEVE_SEEN`, `SLEEVE_BARE` (the sleeves' steps that decide the layer, metres), `CONTACT`, `CONTACT_TOL` (the weight and tolerance of the forearms' contact with the trunk), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
 //!   clothing layer tried, metres; 0: none), `TURN_CHECK` (frames between checks of a body
@@ -92,6 +95,10 @@ fn settings() -> TrackerSettings {
         ("CLOTHING", &mut s.clothing_m),
         ("PMINW", &mut s.parts_min_weight),
         ("LOST", &mut s.lost_inliers),
+        ("SKIRT_FORK", &mut s.skirt.fork_m),
+        ("SKIRT_CREASE", &mut s.skirt.crease_m),
+        ("SKIRT_WIDTH", &mut s.skirt.width),
+        ("SKIRT_FLARE", &mut s.skirt.flare),
     ] {
         if let Some(v) = env(key) {
             *field = v;

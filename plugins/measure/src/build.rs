@@ -20,8 +20,10 @@
 //! session 45).
 
 use fitroom_body::{BodyModel, Shape};
+use fitroom_depth::camera::WIDTH;
 use fitroom_sensor::KinectJoint;
 use fitroom_tracker::denoise::denoised;
+use fitroom_tracker::skirt::SkirtZone;
 use fitroom_tracker::{BuildFit, BuildFitted, Snapshot};
 
 use crate::fit::{FitSettings, ViewPose};
@@ -77,8 +79,11 @@ impl TrackedBuild {
         let mut views = Vec::with_capacity(snapshots.len());
         for s in snapshots {
             let frame = denoised(&s.frame, &s.tracked.person.mask, self.denoise_px);
-            let view = AveragedView::single(&calibration_frame(&frame, &s.tracked))
+            let mut view = AveragedView::single(&calibration_frame(&frame, &s.tracked))
                 .map_err(|e| e.to_string())?;
+            if let Some(skirt) = &s.tracked.skirt {
+                hide_skirt(&mut view, skirt);
+            }
             // The tracker's own pose (its bones are the model's): a moving person is not in
             // the calibration's stance, and its root's lean is theirs here. (From the
             // calibration's stance, aimed by the joints, the trunk's joints came out 35.8 mm
@@ -112,6 +117,24 @@ impl TrackedBuild {
                 cost: m.estimate.cost,
             })
             .map_err(|e| e.to_string())
+    }
+}
+
+/// The points of `view` in a skirt's heights left out of the build's fit (the silhouette
+/// kept): a skirt fitted as skin made the legs thick and short. The whole band, not only the
+/// zone the tracker leaves out (a hand beside the skirt keeps its points there to be found
+/// again; the build's single frames are ones the tracker followed well).
+fn hide_skirt(view: &mut AveragedView, skirt: &SkirtZone) {
+    for (i, reading) in view.readings.iter_mut().enumerate() {
+        let z = view.depth_m[i];
+        if *reading > 0 && z > 0.0 {
+            let p = view
+                .camera
+                .unproject((i % WIDTH) as f32, (i / WIDTH) as f32, z);
+            if skirt.in_heights(p) {
+                *reading = 0;
+            }
+        }
     }
 }
 

@@ -23,6 +23,7 @@ use serde::Serialize;
 
 use crate::model::{JointKind, Pose, Posed, TrackBody};
 use crate::silhouette::Silhouette;
+use crate::skirt::SkirtZone;
 use fitroom_sensor::KinectJoint;
 
 /// Weights and thresholds of the fit.
@@ -96,6 +97,10 @@ pub struct Observation<'a> {
     pub points: &'a [Vec3],
     /// Detections: (Kinect joint index, where it is, weight multiplier).
     pub targets: &'a [(usize, Vec3, f32)],
+    /// Where a skirt hides the legs ([`crate::skirt`]): its points, unless on an arm, are
+    /// left out of the data term (the silhouette and free space still hold the legs inside
+    /// it).
+    pub skirt: Option<&'a SkirtZone>,
 }
 
 /// How well a fit matches its frame.
@@ -302,6 +307,8 @@ impl Fitter {
         }
         // Data to model.
         let (mut inliers, mut used, mut sum, mut outliers) = (0usize, 0usize, 0.0f32, 0usize);
+        // Points a skirt hides: out of the data term and of its shares.
+        let mut hidden = 0usize;
         let first = self.candidates.len() != obs.points.len();
         if first {
             self.candidates.clear();
@@ -362,6 +369,15 @@ impl Fitter {
                     (capsule_d, n, capsule_d.abs())
                 }
             };
+            // A skirt's point pulls no leg or pelvis (as skin, the skirt drew the thighs
+            // forward and the calves down, and the knees bent: the person sank into it).
+            if let Some(skirt) = obs.skirt
+                && !layout.arm[matched_bone]
+                && skirt.hides(p)
+            {
+                hidden += 1;
+                continue;
+            }
             if far < 0.03 {
                 inliers += 1;
                 self.support[k] += 1;
@@ -405,9 +421,10 @@ impl Fitter {
             }
         }
         self.spread_gathered(body, layout, &posed, pivot);
-        stats.inliers = inliers as f32 / obs.points.len().max(1) as f32;
+        let fitted = (obs.points.len() - hidden).max(1) as f32;
+        stats.inliers = inliers as f32 / fitted;
         stats.mean_residual_m = sum / used.max(1) as f32;
-        stats.outliers = outliers as f32 / obs.points.len().max(1) as f32;
+        stats.outliers = outliers as f32 / fitted;
         // Model to data: the front of each capsule, along its axis.
         let camera = obs.frame.camera;
         let (mut seen, mut outside) = (0usize, 0usize);

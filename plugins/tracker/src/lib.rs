@@ -20,6 +20,7 @@ pub mod model;
 pub mod segment;
 pub mod shape;
 pub mod silhouette;
+pub mod skirt;
 pub mod sleeve;
 pub mod surface;
 pub mod tracker;

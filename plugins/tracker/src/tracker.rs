@@ -24,6 +24,7 @@ use crate::shape::{
     BuildFit, Estimate, ShapeSearchError, ShapeSettings, Snapshot, estimate, estimate_with,
 };
 use crate::silhouette::Silhouette;
+use crate::skirt::{SkirtSettings, SkirtZone, skirt_zone};
 use crate::sleeve;
 
 /// The person's size from the frames tracked well ([`Tracker::refine_size`]): set anew every
@@ -62,6 +63,9 @@ pub struct TrackerSettings {
     /// lay 119 of 9,771 frames, 94 of them the dance's (a cartwheel), 2 within 10 cm of the
     /// truth (docs/STATUS.md, session 50). 0: never.
     pub lost_inliers: f32,
+    /// How a skirt is told from bare legs ([`crate::skirt`]): where one hides the legs, its
+    /// points are left out of the fit and of the build's.
+    pub skirt: SkirtSettings,
     /// The person's size as the body's scale, when known (e.g. measured); `None`: from
     /// their height when first seen whole.
     pub scale: Option<f32>,
@@ -130,6 +134,7 @@ impl Default for TrackerSettings {
             max_outside: 0.25,
             min_support: 4,
             lost_inliers: 0.7,
+            skirt: SkirtSettings::default(),
             scale: None,
             shape: ShapeSettings::default(),
             recover: true,
@@ -200,6 +205,8 @@ pub struct Tracked {
     /// when it does, though the person did not (to tell the two apart, e.g. when checking
     /// that the person stands still).
     pub body_changes: u32,
+    /// Where a skirt hid the legs: the points left out of the fit ([`crate::skirt`]).
+    pub skirt: Option<SkirtZone>,
 }
 
 impl Tracked {
@@ -321,6 +328,8 @@ pub struct Tracker {
     proposals: Vec<Proposal>,
     /// When the person was last seen (the frame's time, s) and where (their centroid).
     last_seen: Option<(f64, Vec3)>,
+    /// Where a skirt hides the legs in this frame, from the pose followed into it.
+    skirt: Option<SkirtZone>,
 }
 
 impl Tracker {
@@ -358,6 +367,7 @@ impl Tracker {
             part_scratch: PartScratch::default(),
             proposals: Vec::new(),
             last_seen: None,
+            skirt: None,
         }
     }
 
@@ -661,6 +671,12 @@ impl Tracker {
         let settings = self.settings;
         let mut started = false;
         let previous = self.previous.take();
+        // The skirt about the hips of the pose followed into the frame (a start has none).
+        let followed = self.pose.take();
+        self.skirt = followed
+            .as_ref()
+            .and_then(|pose| self.skirt_at(frame, &person, pose));
+        self.pose = followed;
         let (pose, fit) = match self.pose.take() {
             Some(mut pose) => {
                 let last = pose.rotation;
@@ -730,6 +746,7 @@ impl Tracker {
             started,
             person: Arc::new(person),
             body_changes: self.body_changes,
+            skirt: self.skirt.clone(),
         };
         self.estimate_shape(frame, &tracked);
         Some(tracked)
@@ -747,7 +764,28 @@ impl Tracker {
         let person = Segmenter::new(self.settings.segment).segment(frame)?;
         self.sample_points(frame, &person);
         self.silhouette.update(&person.mask, person.bbox);
+        self.skirt = self.skirt_at(frame, &person, pose);
         Some(self.fit(frame, &person, pose, &[], iterations))
+    }
+
+    /// The skirt the frame shows about the hip joints of `pose` ([`skirt_zone`]).
+    fn skirt_at(
+        &mut self,
+        frame: &DepthFrame,
+        person: &Segmentation,
+        pose: &Pose,
+    ) -> Option<SkirtZone> {
+        self.body.pose_into(pose, &mut self.posed);
+        let joints = self.body.kinect_joints(&self.posed);
+        let at = |j: KinectJoint| joints[j.index()];
+        skirt_zone(
+            frame,
+            &person.mask,
+            person.floor.normal,
+            at(KinectJoint::HipLeft),
+            at(KinectJoint::HipRight),
+            &self.settings.skirt,
+        )
     }
 
     /// About [`TrackerSettings::points`] of the person's readings on a regular grid, each
@@ -787,6 +825,7 @@ impl Tracker {
             silhouette: &self.silhouette,
             points: &self.points,
             targets,
+            skirt: self.skirt.as_ref(),
         };
         self.fitter
             .fit(&self.body, pose, &obs, &self.settings.fit, iterations)

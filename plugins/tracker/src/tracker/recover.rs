@@ -244,6 +244,7 @@ impl Tracker {
                 silhouette: &self.silhouette,
                 points: &self.points,
                 targets: &targets,
+                skirt: self.skirt.as_ref(),
             };
             let n = self.settings.iterations;
             fitter.fit(&self.body, &mut candidate, &obs, &self.settings.fit, n);

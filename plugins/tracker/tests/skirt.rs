@@ -1,0 +1,204 @@
+//! A skirt found in the depth ([`fitroom_tracker::skirt`]): a flared tube from the hips down
+//! around the standing body is found, its hem within a few centimetres of where it ends; the
+//! same body bare, legs apart or pressed together (a heavy man's thighs meeting), wears none;
+//! and with the skirt's points left out of the fit the hips are held.
+
+mod common;
+
+use common::{Body, body, render, scene, shaped_body};
+use fitroom_depth::synthetic::{Label, SceneMesh};
+use fitroom_sensor::KinectJoint;
+use fitroom_tracker::skirt::{SkirtSettings, SkirtZone, skirt_zone};
+use fitroom_tracker::{SegmentSettings, Segmenter, TrackBody, Tracker, TrackerSettings};
+use glam::Vec3;
+
+/// An elliptic tube about the vertical through `centre`, open at both ends: its half-widths
+/// sideways and in depth `top_m` at `top` (height), `hem_m` at `hem` (a hem in depth near
+/// the shins, as cloth hangs: one 20 cm before them parted them from the person).
+fn skirt_mesh(centre: Vec3, top: f32, hem: f32, top_m: [f32; 2], hem_m: [f32; 2]) -> SceneMesh {
+    const AROUND: usize = 48;
+    const DOWN: usize = 12;
+    let mut positions = Vec::new();
+    for i in 0..=DOWN {
+        let t = i as f32 / DOWN as f32;
+        let y = top + (hem - top) * t;
+        let [rx, rz] = [0, 1].map(|i| top_m[i] + (hem_m[i] - top_m[i]) * t);
+        for k in 0..AROUND {
+            let a = k as f32 / AROUND as f32 * std::f32::consts::TAU;
+            positions.push(Vec3::new(
+                centre.x + rx * a.cos(),
+                y,
+                centre.z + rz * a.sin(),
+            ));
+        }
+    }
+    let mut triangles = Vec::new();
+    for i in 0..DOWN {
+        for k in 0..AROUND {
+            let (a, b) = (
+                (i * AROUND + k) as u32,
+                (i * AROUND + (k + 1) % AROUND) as u32,
+            );
+            let (c, d) = (a + AROUND as u32, b + AROUND as u32);
+            triangles.push([a, b, c]);
+            triangles.push([b, d, c]);
+        }
+    }
+    SceneMesh {
+        positions,
+        triangles,
+        label: Label::Garment,
+        closed: false,
+    }
+}
+
+/// The skirt found on `body` posed by `turns`, 2.6 m away, in a tube reaching
+/// `hem_below_m` under the hip joints (none: bare); and the hip joints' height.
+fn found(
+    body: &Body,
+    turns: common::Turns,
+    hem_below_m: Option<f32>,
+    seed: u64,
+) -> (Option<SkirtZone>, f32) {
+    let (skin, joints) = body.posed(&body.locals(turns, 1.0), Vec3::new(0.0, -0.8, 2.6));
+    let (left, right) = (
+        joints[KinectJoint::HipLeft.index()],
+        joints[KinectJoint::HipRight.index()],
+    );
+    let mid = (left + right) * 0.5;
+    let mut the_scene = scene(vec![(skin, Label::Body)], &body.model.triangles);
+    if let Some(below) = hem_below_m {
+        the_scene.meshes.push(skirt_mesh(
+            mid,
+            mid.y + 0.08,
+            mid.y - below,
+            [0.2, 0.14],
+            [0.25, 0.12],
+        ));
+    }
+    let frame = render(&the_scene, seed, 0.0);
+    let person = Segmenter::new(SegmentSettings::default())
+        .segment(&frame)
+        .expect("the person");
+    let zone = skirt_zone(
+        &frame,
+        &person.mask,
+        person.floor.normal,
+        left,
+        right,
+        &SkirtSettings::default(),
+    );
+    (zone, person.floor.normal.dot(mid))
+}
+
+const TOGETHER: common::Turns = &[("thigh_l", Vec3::Z, 6.0), ("thigh_r", Vec3::Z, -6.0)];
+
+#[test]
+fn a_skirt_is_found_to_its_hem_and_bare_legs_wear_none() {
+    let body = body();
+    for (seed, below) in [(1u64, 0.45f32), (2, 0.6)] {
+        let (zone, hips) = found(&body, &[], Some(below), seed);
+        let zone = zone.unwrap_or_else(|| panic!("seed {seed}: no skirt found {below} m long"));
+        let hem = hips - zone.hem;
+        println!("a skirt to {below} m below the hip joints: hem found {hem:.2} m below");
+        assert!(
+            (hem - below).abs() <= 0.06,
+            "seed {seed}: hem {hem:.2} m below the hip joints, the skirt's {below}"
+        );
+        assert!(zone.hides(Vec3::new(0.0, hips - below * 0.5, 2.5)));
+    }
+    // A heavy man's thighs meet below the crotch: no gap, a crease.
+    let heavy = shaped_body(&fitroom_body::Shape {
+        gender: 1.0,
+        weight: 1.0,
+        muscle: 0.3,
+        ..Default::default()
+    });
+    for (seed, who, turns, what) in [
+        (3u64, &body, &[][..], "apart"),
+        (4, &body, TOGETHER, "together"),
+        (5, &heavy, TOGETHER, "together (a heavy man)"),
+    ] {
+        let (zone, _) = found(who, turns, None, seed);
+        assert_eq!(
+            zone, None,
+            "seed {seed}: bare legs {what} taken for a skirt"
+        );
+    }
+}
+
+/// The mean error (mm) of the hips' joints over the last 10 of 30 frames of a man moving
+/// his arms inside a skirt reaching 0.55 m below his hip joints, tracked with `skirt` (the
+/// default, or none looked for).
+fn hips_error_mm(skirt: SkirtSettings, seed: u64) -> f32 {
+    use KinectJoint::*;
+    let person = shaped_body(&fitroom_body::Shape {
+        gender: 1.0,
+        weight: 0.6,
+        ..Default::default()
+    });
+    let settings = TrackerSettings {
+        skirt,
+        ..TrackerSettings::default()
+    };
+    let track = TrackBody::new(&person.model, &person.positions).expect("body");
+    let mut tracker = Tracker::new(track, settings);
+    let (mut sum, mut n, mut found) = (0.0, 0, 0);
+    for k in 0..30 {
+        let share = 0.3 + 0.3 * (k as f32 / 10.0).sin();
+        let (skin, truth) = person.posed(
+            &person.locals(common::ARMS_OUT, share),
+            Vec3::new(0.0, -0.8, 2.8),
+        );
+        let mid = (truth[HipLeft.index()] + truth[HipRight.index()]) * 0.5;
+        let mut the_scene = scene(vec![(skin, Label::Body)], &person.model.triangles);
+        the_scene.meshes.push(skirt_mesh(
+            mid,
+            mid.y + 0.08,
+            mid.y - 0.55,
+            [0.22, 0.16],
+            [0.3, 0.15],
+        ));
+        let frame = render(&the_scene, seed + k, k as f64 / 30.0);
+        let tracked = tracker.track(&frame).expect("tracked");
+        if k >= 20 {
+            for j in [HipCenter, HipLeft, HipRight] {
+                sum += tracked.joints[j.index()]
+                    .position
+                    .distance(truth[j.index()]);
+                n += 1;
+            }
+            found += usize::from(tracked.skirt.is_some());
+        }
+    }
+    let looked = skirt.fork_m > 0.0;
+    assert_eq!(
+        found,
+        if looked { 10 } else { 0 },
+        "seed {seed}: the skirt found in {found} of the last 10 frames (looked for: {looked})"
+    );
+    sum / n as f32 * 1000.0
+}
+
+/// The skirt is found on a person moving their arms out (their points kept: a hand beside
+/// it is not the skirt's) and its points left out of the fit hold the hips as well as
+/// fitted as skin: a rigid tube does not draw the legs as a dress's cloth does (29-30 mm
+/// either way here; the dresses' figures are in docs/STATUS.md, session 53).
+#[test]
+fn hips_under_a_skirt_are_held_with_its_points_left_out() {
+    let off = SkirtSettings {
+        fork_m: 0.0,
+        ..SkirtSettings::default()
+    };
+    for seed in [11, 31] {
+        let (with, without) = (
+            hips_error_mm(SkirtSettings::default(), seed),
+            hips_error_mm(off, seed),
+        );
+        println!("seed {seed}: hips {with:.1} mm, {without:.1} with the skirt fitted as skin");
+        assert!(
+            with <= 40.0 && with <= without + 5.0,
+            "seed {seed}: hips {with:.1} against {without:.1} mm"
+        );
+    }
+}
