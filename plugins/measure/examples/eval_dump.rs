@@ -7,8 +7,9 @@
 //! * `SAVE_SHAPE=F.ron`: the estimated build written out;
 //! * `JOINTS=F.jsonl`: per frame tracked, the tracked and the true joints, the
 //!   confidences and the fit's figures (`fit`: share of points near the body, share of the
-//!   body outside the silhouette, mean residual in metres, share of outliers), for analyses
-//!   the report does not make;
+//!   body outside the silhouette, mean residual in metres, share of outliers) and the skirt
+//!   found (`skirt`: its top and hem heights and the floor's normal), for analyses the
+//!   report does not make;
 //! * `PPM_FRAME=N`: frame N as a picture (`/tmp/frame.ppm`: depth, the person, the true and
 //!   the tracked skeletons);
 //! * `SHAPE=F.ron`, `SCALE=S`: track with a given body shape and size (to see what not knowing
@@ -197,6 +198,9 @@ fn main() -> Result<(), Error> {
                 "truth": joints.iter().map(|j| j.to_array()).collect::<Vec<_>>(),
                 "confidence": t.joints.iter().map(|j| format!("{:?}", j.confidence)).collect::<Vec<_>>(),
                 "fit": [t.fit.inliers, t.fit.outside, t.fit.mean_residual_m, t.fit.outliers],
+                // The skirt found: its top and hem, heights along the floor's normal, and
+                // that normal (sensor space).
+                "skirt": t.skirt.as_ref().map(|z| (z.top, z.hem, z.up.to_array())),
             });
             writeln!(out, "{line}")?;
         }
