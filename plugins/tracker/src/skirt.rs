@@ -55,9 +55,8 @@ impl SkirtZone {
 
     /// Whether `p` lies in the zone.
     pub fn hides(&self, p: Vec3) -> bool {
-        let h = self.up.dot(p);
         let side = (p - self.centre).dot(self.across).abs();
-        h <= self.top && h >= self.hem && side <= self.half_width_m + self.flare * (self.top - h)
+        self.in_heights(p) && side <= self.half_width_m + self.flare * (self.top - self.up.dot(p))
     }
 }
 
