@@ -119,6 +119,10 @@ pub struct TrackerSettings {
     /// gained 1.6-2.0 mm on both noises, the T-shirt's lost arms most, but as many
     /// recordings lost as gained, and no rendered case was found where it alone finds the arm.
     pub recover_folded_at_rest: bool,
+    /// Legs whose ankles are not at the feet seen near the floor are also tried with the
+    /// ankles pulled there (`tracker/feet.rs`): under a skirt, a lost leg has little else
+    /// to bring it back.
+    pub recover_by_feet: bool,
 }
 
 impl Default for TrackerSettings {
@@ -151,6 +155,7 @@ impl Default for TrackerSettings {
             sleeve_bare_m: 0.01,
             turn_check_every: 10,
             recover_folded_at_rest: false,
+            recover_by_feet: true,
         }
     }
 }
@@ -265,6 +270,7 @@ enum Estimation {
     Done,
 }
 
+mod feet;
 mod front;
 mod recover;
 mod start;

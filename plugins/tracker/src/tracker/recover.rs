@@ -8,7 +8,8 @@
 //! the geodesic extrema of its hand or foot, as a start is, and for an arm also with the
 //! forearm bent forward, and, with a body-part forest ([`crate::bodyparts`]), pulled to the
 //! forest's joint proposals; an arm held before the body ([`super::front`]) is tried with
-//! its hand pulled to what stands out there. A hypothesis is kept when it explains the frame
+//! its hand pulled to what stands out there; legs whose ankles are off the feet seen near the
+//! floor ([`super::feet`]) are tried with the ankles pulled to them. A hypothesis is kept when it explains the frame
 //! better.
 
 use std::f32::consts::FRAC_PI_2;
@@ -87,6 +88,9 @@ enum Hypothesis {
     Proposed,
     /// An arm with its forearm bent forward and its hand pulled to a point before the body.
     Held(Vec3),
+    /// Legs at rest, their ankles pulled to the feet seen near the floor ([`super::feet`]),
+    /// the left's and the right's.
+    Feet([Vec3; 2]),
     /// An arm at rest, pulled nowhere (tried for an arm folded up on itself, with
     /// [`super::TrackerSettings::recover_folded_at_rest`]).
     Rest,
@@ -160,8 +164,13 @@ impl Tracker {
     ) -> (Pose, FitStats) {
         let suspects = self.suspects(&pose, &fit);
         // (`suspects` posed the body as `pose`.)
+        let feet = if self.settings.recover_by_feet {
+            self.feet_missed(person)
+        } else {
+            None
+        };
         let held = self.before_the_body(frame, person);
-        if suspects.is_empty() && held.is_empty() {
+        if suspects.is_empty() && held.is_empty() && feet.is_none() {
             return (pose, fit);
         }
         let ends = geodesic_extrema(frame, person);
@@ -189,6 +198,17 @@ impl Tracker {
                 }
             }
             tries.push((limbs, Hypothesis::Extremum));
+        }
+        // The legs whose ankles are off their feet, and if that is one, both.
+        if let Some(f) = feet {
+            let one = f.legs.len() == 1;
+            tries.push((f.legs, Hypothesis::Feet(f.ankles)));
+            if one {
+                tries.push((
+                    vec![Limb::LegLeft, Limb::LegRight],
+                    Hypothesis::Feet(f.ankles),
+                ));
+            }
         }
         // Then an arm held before the body, pulled there; the two arms are alternatives to
         // each other (a hand before the belly may be either's): each is tried from the same
@@ -230,6 +250,14 @@ impl Tracker {
                         .map(|j| j.kind)
                     {
                         candidate.local[forearm] = Quat::from_axis_angle(axis, FRAC_PI_2);
+                    }
+                } else if let Hypothesis::Feet([left, right]) = how {
+                    match limb {
+                        Limb::LegLeft => targets.push((KinectJoint::AnkleLeft.index(), left, 1.0)),
+                        Limb::LegRight => {
+                            targets.push((KinectJoint::AnkleRight.index(), right, 1.0))
+                        }
+                        _ => {}
                     }
                 } else if how == Hypothesis::Rest {
                     // At rest, pulled nowhere: the fit alone places it.
