@@ -128,6 +128,26 @@ fn a_skirt_is_found_to_its_hem_and_bare_legs_wear_none() {
     }
 }
 
+/// Frame `k` (at 30 Hz) of `skin` in a skirt about its hip joints (from `truth`) reaching
+/// `below` metres under them, its half-widths `top_m` at the top and `hem_m` at the hem
+/// ([`skirt_mesh`]).
+fn skirted(
+    person: &Body,
+    skin: Vec<Vec3>,
+    truth: &[Vec3],
+    (below, top_m, hem_m): (f32, [f32; 2], [f32; 2]),
+    seed: u64,
+    k: u64,
+) -> fitroom_depth::DepthFrame {
+    use KinectJoint::*;
+    let mid = (truth[HipLeft.index()] + truth[HipRight.index()]) * 0.5;
+    let mut the_scene = scene(vec![(skin, Label::Body)], &person.model.triangles);
+    the_scene
+        .meshes
+        .push(skirt_mesh(mid, mid.y + 0.08, mid.y - below, top_m, hem_m));
+    render(&the_scene, seed, k as f64 / 30.0)
+}
+
 /// The mean error (mm) of the hips' joints over the last 10 of 30 frames of a man moving
 /// his arms inside a skirt reaching 0.55 m below his hip joints, tracked with `skirt` (the
 /// default, or none looked for).
@@ -151,16 +171,14 @@ fn hips_error_mm(skirt: SkirtSettings, seed: u64) -> f32 {
             &person.locals(common::ARMS_OUT, share),
             Vec3::new(0.0, -0.8, 2.8),
         );
-        let mid = (truth[HipLeft.index()] + truth[HipRight.index()]) * 0.5;
-        let mut the_scene = scene(vec![(skin, Label::Body)], &person.model.triangles);
-        the_scene.meshes.push(skirt_mesh(
-            mid,
-            mid.y + 0.08,
-            mid.y - 0.55,
-            [0.22, 0.16],
-            [0.3, 0.15],
-        ));
-        let frame = render(&the_scene, seed + k, k as f64 / 30.0);
+        let frame = skirted(
+            &person,
+            skin,
+            &truth,
+            (0.55, [0.22, 0.16], [0.3, 0.15]),
+            seed + k,
+            k,
+        );
         let tracked = tracker.track(&frame).expect("tracked");
         if k >= 20 {
             for j in [HipCenter, HipLeft, HipRight] {
@@ -222,16 +240,14 @@ fn walking_legs_error_mm(by_feet: bool, seed: u64) -> f32 {
         let swing = 20.0 * (k as f32 * std::f32::consts::TAU / 20.0).sin();
         let turns = [("thigh_l", Vec3::X, -swing), ("thigh_r", Vec3::X, swing)];
         let (skin, truth) = person.posed(&person.locals(&turns, 1.0), Vec3::new(0.0, -0.8, 2.6));
-        let mid = (truth[HipLeft.index()] + truth[HipRight.index()]) * 0.5;
-        let mut the_scene = scene(vec![(skin, Label::Body)], &person.model.triangles);
-        the_scene.meshes.push(skirt_mesh(
-            mid,
-            mid.y + 0.08,
-            mid.y - 0.5,
-            [0.2, 0.14],
-            [0.3, 0.22],
-        ));
-        let frame = render(&the_scene, seed + k, k as f64 / 30.0);
+        let frame = skirted(
+            &person,
+            skin,
+            &truth,
+            (0.5, [0.2, 0.14], [0.3, 0.22]),
+            seed + k,
+            k,
+        );
         let tracked = tracker.track(&frame).expect("tracked");
         if k >= 20 {
             for j in [KneeLeft, AnkleLeft, KneeRight, AnkleRight] {
