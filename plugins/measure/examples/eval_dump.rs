@@ -8,7 +8,8 @@
 //! * `JOINTS=F.jsonl`: per frame tracked, the tracked and the true joints, the
 //!   confidences and the fit's figures (`fit`: share of points near the body, share of the
 //!   body outside the silhouette, mean residual in metres, share of outliers) and the skirt
-//!   found (`skirt`: its top and hem heights and the floor's normal), for analyses the
+//!   found (`skirt`: its top and hem heights, the floor's normal, and whether it was found
+//!   in the frame or is worn from the last frames), for analyses the
 //!   report does not make;
 //! * `PPM_FRAME=N`: frame N as a picture (`/tmp/frame.ppm`: depth, the person, the true and
 //!   the tracked skeletons);
@@ -22,7 +23,10 @@
 //!   reading averaged, by the tracker and by the build's fit; 0: none); `SKIRT_FORK`,
 //!   `SKIRT_CREASE` (a skirt's least length below the hip joints, 0: none looked for; the
 //!   crease that parts two legs, metres), `SKIRT_WIDTH`, `SKIRT_FLARE` (the zone's half-width
-//!   in half hip spacings, its flare per metre down);
+//!   in half hip spacings, its flare per metre down), `SKIRT_MEM_S`, `SKIRT_MEM_SHARE` (a
+//!   skirt is worn if found in this share of the frames of the last seconds; 0 s: frame by
+//!   frame), `SKIRT_WORN` (the weight of its points outside the body where it is worn but
+//!   not found);
 //!   `ITER`, `POINTS`, `DAMP`, `FREE`, `HUBER`, `OUTLIER`, `SCALE_STIFF`,
 //!   `SNAPS`, `LOOKS` (looks at the build per person), `EVERY`, `CARRY_TURN`, `TURN_MARGIN`, `PMINW`, `ARM_FRONT_CAP`, `CLOTH_GAP`, `CLOTH_MARGIN` (the share by which the build fit's cost must fall under the layer), `SLEEVE_SEEN`, `SLEEVE_BARE` (the sleeves' steps that decide the layer, metres), `CONTACT`, `CONTACT_TOL` (the weight and tolerance of the forearms' contact with the trunk), `UNDER_LAYER`, `UNDER_OUTSIDE`, `UNDER_PRIOR` (the body under a shirt: its share of the layer, the weight of points outside the skin, the prior's weight), `CLOTHING` (the
 //!   clothing layer tried, metres; 0: none), `TURN_CHECK` (frames between checks of a body
@@ -86,6 +90,9 @@ fn settings() -> TrackerSettings {
         ("OUTLIER", &mut s.fit.outlier_m),
         ("ARM_FRONT_CAP", &mut s.fit.arm_front_cap_m),
         ("CLOTH_GAP", &mut s.fit.cloth_gap_weight),
+        ("SKIRT_WORN", &mut s.fit.skirt_worn_weight),
+        ("SKIRT_MEM_S", &mut s.skirt.memory_s),
+        ("SKIRT_MEM_SHARE", &mut s.skirt.memory_share),
         ("CONTACT", &mut s.fit.contact_weight),
         ("CONTACT_TOL", &mut s.fit.contact_tolerance_m),
         ("CARRY_TURN", &mut s.carry_turn),
@@ -200,7 +207,7 @@ fn main() -> Result<(), Error> {
                 "fit": [t.fit.inliers, t.fit.outside, t.fit.mean_residual_m, t.fit.outliers],
                 // The skirt found: its top and hem, heights along the floor's normal, and
                 // that normal (sensor space).
-                "skirt": t.skirt.as_ref().map(|z| (z.top, z.hem, z.up.to_array())),
+                "skirt": t.skirt.as_ref().map(|z| (z.top, z.hem, z.up.to_array(), z.seen)),
             });
             writeln!(out, "{line}")?;
         }

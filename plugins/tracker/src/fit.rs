@@ -59,6 +59,9 @@ pub struct FitSettings {
     /// at 0.3; docs/STATUS.md, session 45. The tracker's own macro search, without a
     /// `BuildFit`, fits its clothed candidates with it too: not measured there.)
     pub cloth_gap_weight: f32,
+    /// The weight of a point outside the body in a skirt worn but not found in the frame
+    /// ([`crate::skirt::SkirtMemory`]) relative to one inside it.
+    pub skirt_worn_weight: f32,
     /// Weight of one contact sample (a point on a forearm's or a hand's axis) sunk into the
     /// trunk's skin, relative to one data point. An arm hanging against a heavy trunk or a
     /// shirt shows no gap in the depth, and its points are explained as well by a forearm
@@ -81,6 +84,7 @@ impl Default for FitSettings {
             scale_stiffness: 1.0e6,
             arm_front_cap_m: 0.05,
             cloth_gap_weight: 0.3,
+            skirt_worn_weight: 0.3,
             contact_weight: 20.0,
             contact_tolerance_m: 0.02,
         }
@@ -371,12 +375,18 @@ impl Fitter {
             };
             // A skirt's point pulls no leg or pelvis (as skin, the skirt drew the thighs
             // forward and the calves down, and the knees bent: the person sank into it).
+            // One worn but not seen in this frame pulls weakly: hidden, a leg lost there had
+            // nothing to find it by.
+            let mut worn = false;
             if let Some(skirt) = obs.skirt
                 && !layout.arm[matched_bone]
                 && skirt.hides(p)
             {
-                hidden += 1;
-                continue;
+                if skirt.seen {
+                    hidden += 1;
+                    continue;
+                }
+                worn = true;
             }
             if far < 0.03 {
                 inliers += 1;
@@ -395,6 +405,9 @@ impl Fitter {
             };
             if d > 0.0 && layout.loose[matched_bone] {
                 w *= settings.cloth_gap_weight;
+            }
+            if d > 0.0 && worn {
+                w *= settings.skirt_worn_weight;
             }
             // The capsule moving by δ at p changes d by -n·δ: gathered per capsule as
             // ψ = (dir, p × dir, p · dir) with dir = -n (see `Gathered`).

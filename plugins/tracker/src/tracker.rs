@@ -24,7 +24,7 @@ use crate::shape::{
     BuildFit, Estimate, ShapeSearchError, ShapeSettings, Snapshot, estimate, estimate_with,
 };
 use crate::silhouette::Silhouette;
-use crate::skirt::{SkirtSettings, SkirtZone, skirt_zone};
+use crate::skirt::{SkirtMemory, SkirtSettings, SkirtZone, legs_apart_in_image, skirt_zone};
 use crate::sleeve;
 
 /// The person's size from the frames tracked well ([`Tracker::refine_size`]): set anew every
@@ -258,6 +258,10 @@ const WELL_INLIERS: f32 = 0.6;
 /// 175 cm man 157-162 cm tall for good; from frames of him standing it is 172-174 cm.
 const TALL: f32 = 0.92;
 
+/// A skirt worn is taken to hang below the hips only while the trunk leans less than 45°
+/// from the floor's normal (cosine).
+const UPRIGHT_COS: f32 = std::f32::consts::FRAC_1_SQRT_2;
+
 /// Where the estimate of the person's build is.
 enum Estimation {
     /// The tracker keeps its body.
@@ -336,6 +340,8 @@ pub struct Tracker {
     last_seen: Option<(f64, Vec3)>,
     /// Where a skirt hides the legs in this frame, from the pose followed into it.
     skirt: Option<SkirtZone>,
+    /// The skirts found in the last frames: one worn where this frame does not show it.
+    skirts: SkirtMemory,
 }
 
 impl Tracker {
@@ -374,6 +380,7 @@ impl Tracker {
             proposals: Vec::new(),
             last_seen: None,
             skirt: None,
+            skirts: SkirtMemory::default(),
         }
     }
 
@@ -642,6 +649,7 @@ impl Tracker {
         self.pose = None;
         self.previous = None;
         self.last_seen = None;
+        self.skirts.clear();
         self.forget_size();
         self.forget_shape();
     }
@@ -678,10 +686,16 @@ impl Tracker {
         let mut started = false;
         let previous = self.previous.take();
         // The skirt about the hips of the pose followed into the frame (a start has none).
+        // A skirt worn but not seen in this frame is taken as found in the last ones.
         let followed = self.pose.take();
-        self.skirt = followed
-            .as_ref()
-            .and_then(|pose| self.skirt_at(frame, &person, pose));
+        if let Some(pose) = &followed {
+            let found = self.skirt_at(frame, &person, pose);
+            self.skirts
+                .note(frame.time_s, found.as_ref(), &self.settings.skirt);
+            self.skirt = found.or_else(|| self.skirt_worn(frame, &person, pose));
+        } else {
+            self.skirt = None;
+        }
         self.pose = followed;
         let (pose, fit) = match self.pose.take() {
             Some(mut pose) => {
@@ -792,6 +806,34 @@ impl Tracker {
             at(KinectJoint::HipRight),
             &self.settings.skirt,
         )
+    }
+
+    /// The skirt worn ([`SkirtMemory::worn`]) about the hip joints of `pose`, if the person
+    /// stands upright enough for the hem to be below the hips (not in a cartwheel) and faces
+    /// the sensor enough for the legs to part in the image (seen from the side, the legs
+    /// hidden by a skirt swapped sides).
+    fn skirt_worn(
+        &mut self,
+        frame: &DepthFrame,
+        person: &Segmentation,
+        pose: &Pose,
+    ) -> Option<SkirtZone> {
+        let drop = self.skirts.worn(&self.settings.skirt)?;
+        self.body.pose_into(pose, &mut self.posed);
+        let joints = self.body.kinect_joints(&self.posed);
+        let at = |j: KinectJoint| joints[j.index()];
+        let up = person.floor.normal;
+        let spine = at(KinectJoint::ShoulderCenter) - at(KinectJoint::HipCenter);
+        let (left, right) = (at(KinectJoint::HipLeft), at(KinectJoint::HipRight));
+        if up.dot(spine) < UPRIGHT_COS * spine.length()
+            || !legs_apart_in_image(&frame.camera, left, right)
+        {
+            return None;
+        }
+        Some(SkirtZone {
+            seen: false,
+            ..SkirtZone::below(up, left, right, drop, &self.settings.skirt)
+        })
     }
 
     /// About [`TrackerSettings::points`] of the person's readings on a regular grid, each
