@@ -123,7 +123,9 @@ impl TrackedBuild {
 /// The points of `view` in a skirt's heights left out of the build's fit (the silhouette
 /// kept): a skirt fitted as skin made the legs thick and short. The whole band, not only the
 /// zone the tracker leaves out (a hand beside the skirt keeps its points there to be found
-/// again; the build's single frames are ones the tracker followed well).
+/// again; the build's single frames are ones the tracker followed well). A skirt worn but
+/// not found in the frame ([`SkirtZone::seen`] false) too: its hem is the last one found
+/// (the dresses 60.92 -> 60.43 mm with only this of session 55's change; docs/STATUS.md).
 fn hide_skirt(view: &mut AveragedView, skirt: &SkirtZone) {
     for (i, reading) in view.readings.iter_mut().enumerate() {
         let z = view.depth_m[i];

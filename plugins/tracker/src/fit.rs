@@ -102,8 +102,10 @@ pub struct Observation<'a> {
     /// Detections: (Kinect joint index, where it is, weight multiplier).
     pub targets: &'a [(usize, Vec3, f32)],
     /// Where a skirt hides the legs ([`crate::skirt`]): its points, unless on an arm, are
-    /// left out of the data term (the silhouette and free space still hold the legs inside
-    /// it).
+    /// left out of the data term if it was found in this frame ([`SkirtZone::seen`]), and
+    /// pull weakly from outside the body if it is only worn
+    /// ([`FitSettings::skirt_worn_weight`]); the silhouette and free space still hold the legs
+    /// inside it.
     pub skirt: Option<&'a SkirtZone>,
 }
 

@@ -4,9 +4,11 @@
 //!
 //! Why: fitted as skin, a skirt's points drew the thighs forward and the calves down, and the
 //! knees bent: the person sank into it (the sun dress, the median man with his true build:
-//! hip centre 67 mm low, knees 88 mm forward; docs/STATUS.md, session 51). Its points are
-//! left out of the tracker's fit ([`crate::fit::Observation::skirt`]) and of the build's
-//! (`fitroom_measure::build`); the silhouette and free space still hold the legs inside it.
+//! hip centre 67 mm low, knees 88 mm forward; docs/STATUS.md, session 51). Where it is
+//! found, its points are left out of the tracker's fit ([`crate::fit::Observation::skirt`]);
+//! where it is worn but not found ([`SkirtMemory`], below), kept but weighed as a skirt's. The
+//! build's fit (`fitroom_measure::build`) drops the skirt's heights either way; the silhouette
+//! and free space still hold the legs inside it.
 //!
 //! How: in 2 cm slabs down from the hip joints of the pose followed into the frame, the
 //! pixels between the two joints' columns must all be the person's, and the depth midway
@@ -253,6 +255,9 @@ impl SkirtZone {
     }
 }
 
+/// The most frames [`SkirtMemory`] holds (10 s at 30 Hz).
+const MEMORY_FRAMES: usize = 300;
+
 /// The skirts found in the last frames ([`SkirtSettings::memory_s`]).
 #[derive(Clone, Debug, Default)]
 pub struct SkirtMemory {
@@ -271,7 +276,10 @@ impl SkirtMemory {
         self.frames
             .push_back((time_s, found.map(SkirtZone::drop_m)));
         let since = time_s - f64::from(settings.memory_s);
-        while self.frames.front().is_some_and(|&(t, _)| t < since) {
+        // Bounded also by count: a stalled clock must not grow the window for ever.
+        while self.frames.front().is_some_and(|&(t, _)| t < since)
+            || self.frames.len() > MEMORY_FRAMES
+        {
             self.frames.pop_front();
         }
     }
@@ -350,9 +358,15 @@ mod tests {
         // One frame in 15 over 3 s (bare legs taken for a skirt now and then).
         note(&mut memory, 1.0, 90, 0.4, |k| k % 15 == 0);
         assert!(memory.worn(&settings).is_none());
-        // Time going back (a recording replayed) starts a new window; cleared, none.
-        note(&mut memory, 0.0, 5, 0.4, |_| true);
+        // Time going back (a recording replayed) starts a new window: 2 s without a skirt
+        // after one worn is none (the frames before the jump would have made it worn).
+        note(&mut memory, 0.0, 90, 0.4, |_| true);
+        assert!(memory.worn(&settings).is_some());
+        note(&mut memory, 0.0, 60, 0.4, |_| false);
         assert_eq!(memory.worn(&settings), None);
+        // Cleared (another person): none.
+        note(&mut memory, 2.0, 90, 0.4, |_| true);
+        assert!(memory.worn(&settings).is_some());
         memory.clear();
         assert_eq!(memory.worn(&settings), None);
         // Switched off.

@@ -210,7 +210,8 @@ pub struct Tracked {
     /// when it does, though the person did not (to tell the two apart, e.g. when checking
     /// that the person stands still).
     pub body_changes: u32,
-    /// Where a skirt hid the legs: the points left out of the fit ([`crate::skirt`]).
+    /// Where a skirt hid the legs ([`crate::skirt`]): found in this frame (its points left
+    /// out of the fit) or worn, found in the last ones (its points weighed as a skirt's).
     pub skirt: Option<SkirtZone>,
 }
 

@@ -188,7 +188,7 @@ fn hips_error_mm(skirt: SkirtSettings, seed: u64) -> f32 {
                     .distance(truth[j.index()]);
                 n += 1;
             }
-            found += usize::from(tracked.skirt.is_some());
+            found += usize::from(tracked.skirt.as_ref().is_some_and(|z| z.seen));
         }
     }
     let looked = skirt.fork_m > 0.0;
@@ -301,8 +301,9 @@ fn creased(mut mesh: SceneMesh, centre: Vec3, depth_m: f32) -> SceneMesh {
 
 /// A man moving his arms in a skirt reaching 0.5 m below his hip joints, its front drawn in
 /// 8 cm in every third frame: whether each of frames 50-59 shows the skirt found
-/// ([`skirt_zone`] about the true hip joints), and the tracker's zone in it.
-fn worn_through_creases(settings: SkirtSettings, seed: u64) -> Vec<(bool, Option<SkirtZone>)> {
+/// ([`skirt_zone`] about the true hip joints), the tracker's zone in it and its hip centre's
+/// error, metres.
+fn worn_through_creases(settings: SkirtSettings, seed: u64) -> Vec<(bool, Option<SkirtZone>, f32)> {
     use KinectJoint::*;
     let person = body();
     let track = TrackBody::new(&person.model, &person.positions).expect("body");
@@ -332,7 +333,10 @@ fn worn_through_creases(settings: SkirtSettings, seed: u64) -> Vec<(bool, Option
             let mask = &tracked.person.mask;
             let up = tracked.person.floor.normal;
             let seen = skirt_zone(&frame, mask, up, left, right, &settings).is_some();
-            out.push((seen, tracked.skirt.clone()));
+            let hips = tracked.joints[HipCenter.index()]
+                .position
+                .distance(truth[HipCenter.index()]);
+            out.push((seen, tracked.skirt.clone(), hips));
         }
     }
     out
@@ -340,8 +344,9 @@ fn worn_through_creases(settings: SkirtSettings, seed: u64) -> Vec<(bool, Option
 
 /// Cloth drawn in between the legs makes a crease like the one between bare legs, and that
 /// frame alone shows no skirt; one found in the frames before is still worn there, its
-/// points weighed as a skirt's, not fitted as skin (the dresses' figures: docs/STATUS.md,
-/// session 55). Without the memory, those frames have none.
+/// points weighed as a skirt's, not fitted as skin. Without the memory, those frames have
+/// none. A rigid tube does not draw the legs as a dress's cloth does, so the hips are only
+/// checked to be held no worse (the dresses' gain: docs/STATUS.md, session 55).
 #[test]
 fn a_skirt_is_worn_through_the_frames_a_crease_hides_it() {
     let off = SkirtSettings {
@@ -351,7 +356,17 @@ fn a_skirt_is_worn_through_the_frames_a_crease_hides_it() {
     let seed = 71;
     let with = worn_through_creases(SkirtSettings::default(), seed);
     let without = worn_through_creases(off, seed);
-    for (k, ((seen, zone), (_, zone_off))) in with.iter().zip(&without).enumerate() {
+    let creased_hips = |run: &[(bool, Option<SkirtZone>, f32)]| {
+        let errors: Vec<f32> = run.iter().filter(|r| !r.0).map(|r| r.2).collect();
+        errors.iter().sum::<f32>() / errors.len().max(1) as f32 * 1000.0
+    };
+    let (hips, hips_off) = (creased_hips(&with), creased_hips(&without));
+    println!("hip centre in the creased frames: {hips:.1} mm worn, {hips_off:.1} mm without");
+    assert!(
+        hips <= hips_off + 5.0 && hips < 40.0,
+        "hip centre {hips:.1} mm with the skirt worn, {hips_off:.1} without"
+    );
+    for (k, ((seen, zone, _), (_, zone_off, _))) in with.iter().zip(&without).enumerate() {
         let frame = 50 + k;
         let creased = frame % 3 == 2;
         assert_eq!(!seen, creased, "frame {frame}: the skirt seen {seen}");
